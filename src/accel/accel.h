@@ -1,0 +1,65 @@
+#pragma once
+/// \file accel.h
+/// The one interface every ray-tracing backend implements (Embree, brute force; later our own BVH
+/// and k-d tree). Chosen at run time with `--accel NAME`. Integrators only ever see this interface.
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/bounds.h"
+#include "core/ray.h"
+#include "geometry/shapes.h"
+
+namespace tessera {
+
+/// What a closest-hit query returns. The same record for every backend, so they can be compared
+/// ray by ray: t along the (unnormalised) ray direction; (u, v) barycentrics of vertices 1 and 2 for
+/// triangles (Embree's convention) or spherical (φ/2π, θ/π) for spheres; ids as in SceneGeometry;
+/// `ng` the unit geometric normal (triangles: normalize((p1−p0)×(p2−p0)); spheres: outward).
+struct Hit {
+    float t = kInfinity;
+    float u = 0.f, v = 0.f;
+    uint32_t primId = kInvalidId;
+    uint32_t geomId = kInvalidId;
+    Vec3f ng{0.f};
+};
+
+struct AccelStats {
+    double buildSeconds = 0.0;
+    size_t memoryBytes = 0;  ///< of the structure itself, excluding the scene's vertex data
+    size_t primitives = 0;
+};
+
+struct AccelOptions {
+    int threads = 0;  ///< threads for the build (0 = all); Embree's device gets the same count
+};
+
+class Accel {
+public:
+    virtual ~Accel() = default;
+    virtual std::string_view name() const = 0;
+    /// Closest hit with t in (ray.tMin, ray.tMax). Rays with a non-finite origin or direction, or a
+    /// zero direction, never hit. Thread-safe.
+    virtual bool intersect(const Ray& ray, Hit& hit) const = 0;
+    /// Any hit with t in (ray.tMin, ray.tMax) (shadow rays). Thread-safe.
+    virtual bool occluded(const Ray& ray) const = 0;
+    virtual Bounds3f bounds() const = 0;
+    virtual AccelStats stats() const = 0;
+};
+
+/// Names accepted by createAccel, e.g. {"embree", "brute"}.
+std::vector<std::string> accelNames();
+
+/// Builds the named backend over `geometry`, which must outlive it. Throws InputError on an
+/// unknown name.
+std::unique_ptr<Accel> createAccel(std::string_view name, const SceneGeometry& geometry,
+                                   const AccelOptions& options = {});
+
+/// True when the ray can be traced at all (finite origin and direction, non-zero direction, tMin ≤ tMax).
+inline bool isTraceableRay(const Ray& r) {
+    return isFinite(r.o) && isFinite(r.d) && (r.d.x != 0.f || r.d.y != 0.f || r.d.z != 0.f) &&
+           !std::isnan(r.tMin) && !std::isnan(r.tMax) && r.tMin <= r.tMax;
+}
+
+}  // namespace tessera

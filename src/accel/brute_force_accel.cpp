@@ -1,0 +1,69 @@
+#include "accel/brute_force_accel.h"
+
+#include "geometry/intersect.h"
+
+namespace tessera {
+
+BruteForceAccel::BruteForceAccel(const SceneGeometry& geometry) : geometry_(geometry), bounds_(geometry.bounds()) {}
+
+bool BruteForceAccel::intersect(const Ray& rayIn, Hit& hit) const {
+    if (!isTraceableRay(rayIn)) return false;
+    Ray ray = rayIn;
+    bool found = false;
+    for (uint32_t g = 0; g < geometry_.meshes.size(); ++g) {
+        const TriangleMesh& mesh = geometry_.meshes[g];
+        for (uint32_t i = 0; i < mesh.triangles.size(); ++i) {
+            const glm::uvec3& tri = mesh.triangles[i];
+            const Vec3f &p0 = mesh.positions[tri.x], &p1 = mesh.positions[tri.y], &p2 = mesh.positions[tri.z];
+            TriangleHit th;
+            if (!intersectTriangle(ray, p0, p1, p2, th)) continue;
+            ray.tMax = th.t;
+            hit.t = th.t;
+            hit.u = th.u;
+            hit.v = th.v;
+            hit.geomId = g;
+            hit.primId = i;
+            hit.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+            found = true;
+        }
+    }
+    for (uint32_t i = 0; i < geometry_.spheres.size(); ++i) {
+        const Sphere& s = geometry_.spheres[i];
+        double t = intersectSphere(s.center, s.radius, ray);
+        if (t < 0.0) continue;
+        ray.tMax = float(t);
+        Vec3f p = ray.o + float(t) * ray.d;
+        Vec3f n = glm::normalize(Vec3f(Vec3d(p) - Vec3d(s.center)));
+        Vec2f uv = sphereUv(n);
+        hit.t = float(t);
+        hit.u = uv.x;
+        hit.v = uv.y;
+        hit.geomId = geometry_.sphereGeomId();
+        hit.primId = i;
+        hit.ng = n;
+        found = true;
+    }
+    return found;
+}
+
+bool BruteForceAccel::occluded(const Ray& ray) const {
+    if (!isTraceableRay(ray)) return false;
+    for (const TriangleMesh& mesh : geometry_.meshes) {
+        for (const glm::uvec3& tri : mesh.triangles) {
+            TriangleHit th;
+            if (intersectTriangle(ray, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z], th))
+                return true;
+        }
+    }
+    for (const Sphere& s : geometry_.spheres)
+        if (intersectSphere(s.center, s.radius, ray) >= 0.0) return true;
+    return false;
+}
+
+AccelStats BruteForceAccel::stats() const {
+    AccelStats s;
+    s.primitives = geometry_.primitiveCount();
+    return s;
+}
+
+}  // namespace tessera

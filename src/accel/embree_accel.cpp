@@ -1,0 +1,190 @@
+#include "accel/embree_accel.h"
+
+#include <embree3/rtcore.h>
+
+#include <chrono>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include "geometry/intersect.h"
+
+namespace tessera {
+namespace {
+
+void embreeErrorCallback(void*, RTCError code, const char* message) {
+    // Embree reports programming errors (invalid arguments) and out-of-memory here; both are fatal
+    // for a render, so surface them as exceptions at the call site instead of silent garbage.
+    if (code == RTC_ERROR_NONE) return;
+    throw std::runtime_error(std::string("Embree error ") + std::to_string(int(code)) + ": " +
+                             (message ? message : ""));
+}
+
+const SceneGeometry* geometryOf(void* userPtr) { return static_cast<const SceneGeometry*>(userPtr); }
+
+void sphereBoundsFn(const RTCBoundsFunctionArguments* args) {
+    const Sphere& s = geometryOf(args->geometryUserPtr)->spheres[args->primID];
+    // Pad by a relative 1e-6 so float rounding of centre ± radius never cuts the sphere.
+    float pad = 1e-6f * (s.radius + maxComponent(glm::abs(s.center)));
+    Bounds3f b = sphereBounds(s);
+    args->bounds_o->lower_x = b.lower.x - pad;
+    args->bounds_o->lower_y = b.lower.y - pad;
+    args->bounds_o->lower_z = b.lower.z - pad;
+    args->bounds_o->upper_x = b.upper.x + pad;
+    args->bounds_o->upper_y = b.upper.y + pad;
+    args->bounds_o->upper_z = b.upper.z + pad;
+}
+
+Ray rayFromEmbree(RTCRayN* ray, unsigned N, unsigned i) {
+    Ray r;
+    r.o = {RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i)};
+    r.d = {RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i)};
+    r.tMin = RTCRayN_tnear(ray, N, i);
+    r.tMax = RTCRayN_tfar(ray, N, i);
+    return r;
+}
+
+void sphereIntersectFn(const RTCIntersectFunctionNArguments* args) {
+    const SceneGeometry* geometry = geometryOf(args->geometryUserPtr);
+    const Sphere& s = geometry->spheres[args->primID];
+    RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, args->N);
+    RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, args->N);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        Ray r = rayFromEmbree(ray, args->N, i);
+        double t = intersectSphere(s.center, s.radius, r);
+        if (t < 0.0) continue;
+        Vec3f n = glm::normalize(Vec3f(Vec3d(r.o) + t * Vec3d(r.d) - Vec3d(s.center)));
+        Vec2f uv = sphereUv(n);
+        RTCRayN_tfar(ray, args->N, i) = float(t);
+        RTCHitN_Ng_x(hit, args->N, i) = n.x;
+        RTCHitN_Ng_y(hit, args->N, i) = n.y;
+        RTCHitN_Ng_z(hit, args->N, i) = n.z;
+        RTCHitN_u(hit, args->N, i) = uv.x;
+        RTCHitN_v(hit, args->N, i) = uv.y;
+        RTCHitN_primID(hit, args->N, i) = args->primID;
+        RTCHitN_geomID(hit, args->N, i) = args->geomID;
+        RTCHitN_instID(hit, args->N, i, 0) = args->context->instID[0];
+    }
+}
+
+void sphereOccludedFn(const RTCOccludedFunctionNArguments* args) {
+    const Sphere& s = geometryOf(args->geometryUserPtr)->spheres[args->primID];
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        Ray r = rayFromEmbree(args->ray, args->N, i);
+        if (intersectSphere(s.center, s.radius, r) >= 0.0) RTCRayN_tfar(args->ray, args->N, i) = -kInfinity;
+    }
+}
+
+void fillRay(const Ray& r, RTCRay& er) {
+    er.org_x = r.o.x;
+    er.org_y = r.o.y;
+    er.org_z = r.o.z;
+    er.dir_x = r.d.x;
+    er.dir_y = r.d.y;
+    er.dir_z = r.d.z;
+    er.tnear = r.tMin;
+    er.tfar = r.tMax;
+    er.time = 0.f;
+    er.mask = 0xffffffffu;
+    er.id = 0;
+    er.flags = 0;
+}
+
+}  // namespace
+
+EmbreeAccel::EmbreeAccel(const SceneGeometry& geometry, const AccelOptions& options) : geometry_(geometry) {
+    auto start = std::chrono::steady_clock::now();
+    std::string config = options.threads > 0 ? "threads=" + std::to_string(options.threads) : std::string();
+    RTCDevice device = rtcNewDevice(config.c_str());
+    if (!device) throw std::runtime_error("Embree: cannot create a device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+    device_ = device;
+    rtcSetDeviceErrorFunction(device, embreeErrorCallback, nullptr);
+
+    RTCScene scene = rtcNewScene(device);
+    scene_ = scene;
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
+
+    for (uint32_t g = 0; g < geometry.meshes.size(); ++g) {
+        const TriangleMesh& mesh = geometry.meshes[g];
+        if (mesh.triangles.empty()) continue;  // ids stay aligned: attached by id below
+        RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        // Embree reads vertices with 16-byte loads: the buffer it allocates is padded for that.
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                              3 * sizeof(float), mesh.positions.size()));
+        std::memcpy(v, mesh.positions.data(), mesh.positions.size() * sizeof(Vec3f));
+        auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(uint32_t), mesh.triangles.size()));
+        std::memcpy(idx, mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
+        rtcCommitGeometry(geom);
+        rtcAttachGeometryByID(scene, geom, g);
+        rtcReleaseGeometry(geom);
+        stats_.memoryBytes += mesh.positions.size() * 16 + mesh.triangles.size() * 12;
+    }
+    if (!geometry.spheres.empty()) {
+        RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+        rtcSetGeometryUserPrimitiveCount(geom, unsigned(geometry.spheres.size()));
+        rtcSetGeometryUserData(geom, const_cast<SceneGeometry*>(&geometry));
+        rtcSetGeometryBoundsFunction(geom, sphereBoundsFn, const_cast<SceneGeometry*>(&geometry));
+        rtcSetGeometryIntersectFunction(geom, sphereIntersectFn);
+        rtcSetGeometryOccludedFunction(geom, sphereOccludedFn);
+        rtcCommitGeometry(geom);
+        rtcAttachGeometryByID(scene, geom, geometry.sphereGeomId());
+        rtcReleaseGeometry(geom);
+    }
+    rtcCommitScene(scene);
+
+    RTCBounds b;
+    rtcGetSceneBounds(scene, &b);
+    bounds_ = geometry.bounds();
+    stats_.primitives = geometry.primitiveCount();
+    stats_.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    (void)b;
+}
+
+EmbreeAccel::~EmbreeAccel() {
+    if (scene_) rtcReleaseScene(static_cast<RTCScene>(scene_));
+    if (device_) rtcReleaseDevice(static_cast<RTCDevice>(device_));
+}
+
+bool EmbreeAccel::intersect(const Ray& ray, Hit& hit) const {
+    if (!isTraceableRay(ray)) return false;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh;
+    fillRay(ray, rh.ray);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(static_cast<RTCScene>(scene_), &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    hit.t = rh.ray.tfar;
+    hit.u = rh.hit.u;
+    hit.v = rh.hit.v;
+    hit.geomId = rh.hit.geomID;
+    hit.primId = rh.hit.primID;
+    if (hit.geomId < geometry_.meshes.size()) {
+        // Recompute the normal from the vertices, exactly as every other backend does, so records
+        // compare bit for bit and orientation follows our winding convention.
+        const TriangleMesh& mesh = geometry_.meshes[hit.geomId];
+        const glm::uvec3& tri = mesh.triangles[hit.primId];
+        const Vec3f &p0 = mesh.positions[tri.x], &p1 = mesh.positions[tri.y], &p2 = mesh.positions[tri.z];
+        hit.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+    } else {
+        hit.ng = Vec3f(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+    }
+    return true;
+}
+
+bool EmbreeAccel::occluded(const Ray& ray) const {
+    if (!isTraceableRay(ray)) return false;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay r;
+    fillRay(ray, r);
+    rtcOccluded1(static_cast<RTCScene>(scene_), &context, &r);
+    return r.tfar < 0.f;
+}
+
+}  // namespace tessera

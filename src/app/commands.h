@@ -1,0 +1,19 @@
+#pragma once
+/// \file commands.h
+/// The `tessera` subcommands. Each registers its options on the CLI11 app and returns a runner
+/// called after parsing; runners return the process exit code.
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace tessera::app {
+
+using Runner = std::function<int()>;
+
+Runner addRenderCommand(CLI::App& app);
+Runner addCompareCommand(CLI::App& app);
+
+/// Prints "tessera: error: MESSAGE" on one line to stderr.
+void printError(const std::string& message);
+void printWarning(const std::string& message);
+
+}  // namespace tessera::app

@@ -1,0 +1,38 @@
+/// \file main.cpp
+/// `tessera COMMAND ...`: the command-line front end. Exit codes: 0 success, 1 a check failed
+/// (e.g. validation), 2 bad input (scene, image or command line), 130 interrupted.
+#include <iostream>
+
+#include "app/commands.h"
+#include "core/error.h"
+#include "core/version.h"
+
+int main(int argc, char** argv) {
+    using namespace tessera;
+    CLI::App app{"Tessera: a CPU path tracer whose images and numbers you can trust.\n"
+                 "Renders glTF 2.0 scenes (plus Tessera's extensions) and measures error and speed.",
+                 "tessera"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", std::string("tessera ") + versionString() + " (" + gitRevision() + ")");
+    app.footer("Run 'tessera COMMAND --help' for the options of a command.\n"
+               "Example: tessera render scenes/cornell-box/cornell-box.gltf -o out/cornell-box.exr --spp 64");
+    std::vector<std::pair<CLI::App*, app::Runner>> commands;
+    app::Runner render = app::addRenderCommand(app);
+    app::Runner compare = app::addCompareCommand(app);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e) == 0 ? 0 : 2;
+    }
+    try {
+        if (app.got_subcommand("render")) return render();
+        if (app.got_subcommand("compare")) return compare();
+    } catch (const InputError& e) {
+        app::printError(e.what());
+        return 2;
+    } catch (const std::exception& e) {
+        app::printError(std::string("internal error: ") + e.what());
+        return 3;
+    }
+    return 2;
+}

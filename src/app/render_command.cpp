@@ -1,0 +1,232 @@
+/// \file render_command.cpp
+/// `tessera render SCENE`: load, build the acceleration structure, render, write EXR + PNG.
+#include <glm/gtc/matrix_transform.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "accel/accel.h"
+#include "app/commands.h"
+#include "core/error.h"
+#include "core/version.h"
+#include "integrators/integrator.h"
+#include "io/display_transform.h"
+#include "io/image_output.h"
+#include "render/interrupt.h"
+#include "render/renderer.h"
+#include "scene/gltf_loader.h"
+
+namespace tessera::app {
+namespace {
+
+struct RenderArgs {
+    std::string scene, output, png, resolution, integrator, accel, lookAt, display = "sRGB", view = "Standard";
+    int spp = 0, threads = 0, maxDepth = -2;
+    double timeLimit = 0.0, fovDeg = 0.0;
+    int64_t seed = -1;
+    bool quiet = false, json = false, noPng = false;
+};
+
+/// FNV-1a 64 of the scene file: identifies the exact input in the output's metadata.
+std::string hashFile(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    uint64_t h = 0xcbf29ce484222325ULL;
+    char buf[1 << 16];
+    while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+        for (std::streamsize i = 0; i < in.gcount(); ++i) {
+            h ^= uint8_t(buf[i]);
+            h *= 0x100000001b3ULL;
+        }
+    }
+    char out[32];
+    std::snprintf(out, sizeof out, "fnv1a64:%016llx", static_cast<unsigned long long>(h));
+    return out;
+}
+
+std::vector<float> parseNumbers(const std::string& text, const std::string& option) {
+    std::vector<float> v;
+    std::stringstream ss(text);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+        try {
+            size_t used = 0;
+            v.push_back(std::stof(item, &used));
+            if (used != item.size()) throw std::invalid_argument(item);
+        } catch (const std::exception&) {
+            throw InputError(option + ": '" + item + "' is not a number");
+        }
+    }
+    return v;
+}
+
+/// --look-at EX,EY,EZ,TX,TY,TZ[,UX,UY,UZ] → a camera-to-world matrix looking down local −z.
+Mat4f lookAtCamera(const std::string& text) {
+    std::vector<float> v = parseNumbers(text, "--look-at");
+    if (v.size() != 6 && v.size() != 9) throw InputError("--look-at needs 6 or 9 comma-separated numbers");
+    Vec3f eye(v[0], v[1], v[2]), target(v[3], v[4], v[5]);
+    Vec3f up = v.size() == 9 ? Vec3f(v[6], v[7], v[8]) : Vec3f(0, 1, 0);
+    Vec3f f = target - eye;
+    if (!(glm::length(f) > 0.f) || !(glm::length(glm::cross(f, up)) > 0.f))
+        throw InputError("--look-at: eye and target coincide or the up vector is parallel to the view direction");
+    return glm::inverse(glm::lookAt(eye, target, up));
+}
+
+std::string stem(const std::string& path) { return std::filesystem::path(path).stem().string(); }
+
+int runRender(const RenderArgs& a) {
+    std::vector<std::string> warnings;
+    Scene scene = loadGltfScene(a.scene, warnings);
+    for (const std::string& w : warnings) printWarning(w);
+
+    RenderSettings s = scene.settings;
+    if (!a.resolution.empty()) {
+        int w = 0, h = 0;
+        char x = 0, extra = 0;
+        std::stringstream ss(a.resolution);
+        if (!(ss >> w >> x >> h) || (x != 'x' && x != 'X') || (ss >> extra) || w < 1 || h < 1 || w > 65536 || h > 65536)
+            throw InputError("--resolution must look like 640x480 (each side 1..65536), got '" + a.resolution + "'");
+        s.width = w;
+        s.height = h;
+    }
+    if (a.spp > 0) s.spp = a.spp;
+    if (a.maxDepth >= -1) s.maxDepth = a.maxDepth;
+    if (a.seed >= 0) s.seed = uint64_t(a.seed);
+    if (!a.integrator.empty()) s.integrator = a.integrator;
+    std::string accelName = a.accel.empty() ? "embree" : a.accel;
+
+    if (!a.lookAt.empty()) {
+        CameraDesc d = scene.camera.value_or(CameraDesc{});
+        d.cameraToWorld = lookAtCamera(a.lookAt);
+        scene.camera = d;
+    }
+    if (a.fovDeg > 0.0) {
+        if (!scene.camera) throw InputError("--fov needs a camera: the scene has none, add --look-at");
+        scene.camera->yfov = float(a.fovDeg * kPi / 180.0);
+    }
+    if (!scene.camera)
+        throw SceneError(a.scene, "cameras", "the scene has no camera; give one with --look-at EX,EY,EZ,TX,TY,TZ [--fov DEG]");
+
+    std::string exrPath = a.output.empty() ? "out/" + stem(a.scene) + ".exr" : a.output;
+    std::string pngPath = a.noPng ? "" : (a.png.empty() ? std::filesystem::path(exrPath).replace_extension(".png").string() : a.png);
+    // Validate the display transform before spending time on the render.
+    std::optional<io::DisplayTransform> display;
+    if (!pngPath.empty()) display.emplace(a.display, a.view);
+
+    std::unique_ptr<Integrator> integrator = createIntegrator(s.integrator);
+    AccelOptions accelOptions;
+    accelOptions.threads = a.threads;
+    std::unique_ptr<Accel> accel = createAccel(accelName, scene.geometry, accelOptions);
+    Camera camera(*scene.camera, s.width, s.height);
+    RenderContext ctx{scene, *accel, camera, s.maxDepth};
+
+    Film film(s.width, s.height);
+    RenderOptions ro;
+    ro.spp = s.spp;
+    ro.timeLimitSeconds = a.timeLimit;
+    ro.threads = a.threads;
+    ro.seed = s.seed;
+    InterruptGuard guard;
+    interruptFlag().store(false);
+    ro.cancel = &interruptFlag();
+    uint64_t total = a.timeLimit > 0 ? 0 : uint64_t(s.width) * uint64_t(s.height) * uint64_t(s.spp);
+    ProgressReporter progress("render " + stem(a.scene), total, a.timeLimit, a.quiet);
+    ro.progress = &progress;
+    RenderStats stats = renderImage(ctx, *integrator, film, ro);
+
+    io::Metadata md = {
+        {"Software", std::string("Tessera ") + versionString() + " (" + gitRevision() + ")"},
+        {"tessera:version", versionString()},
+        {"tessera:git", gitRevision()},
+        {"tessera:scene", a.scene},
+        {"tessera:scene_hash", hashFile(a.scene)},
+        {"tessera:integrator", std::string(integrator->name())},
+        {"tessera:accel", std::string(accel->name())},
+        {"tessera:spp", std::to_string(stats.sppCompleted)},
+        {"tessera:samples", std::to_string(stats.samples)},
+        {"tessera:seed", std::to_string(s.seed)},
+        {"tessera:max_depth", std::to_string(s.maxDepth)},
+        {"tessera:resolution", std::to_string(s.width) + "x" + std::to_string(s.height)},
+        {"tessera:render_seconds", std::to_string(stats.seconds)},
+        {"tessera:threads", std::to_string(stats.threads)},
+        {"tessera:nonfinite_dropped", std::to_string(stats.nonFiniteDropped)},
+        {"tessera:interrupted", stats.interrupted ? "true" : "false"},
+    };
+    std::vector<float> rgba = film.rgba();
+    io::writeExr(exrPath, s.width, s.height, rgba.data(), md);
+    if (display) io::writePng(pngPath, s.width, s.height, rgba.data(), *display, md);
+
+    double samplesPerSecond = stats.seconds > 0 ? double(stats.samples) / stats.seconds : 0.0;
+    std::ostringstream summary;
+    summary << stats.sppCompleted << " spp in " << formatDuration(stats.seconds) << " ("
+            << samplesPerSecond / 1e6 << " M samples/s, " << stats.threads << " threads)"
+            << (stats.interrupted ? ", INTERRUPTED" : "") << " -> " << exrPath << (pngPath.empty() ? "" : ", " + pngPath);
+    progress.done(summary.str());
+    if (stats.nonFiniteDropped > 0)
+        printWarning(std::to_string(stats.nonFiniteDropped) + " non-finite sample(s) were dropped");
+
+    if (a.json) {
+        nlohmann::json j = {
+            {"scene", a.scene},
+            {"integrator", std::string(integrator->name())},
+            {"accel", std::string(accel->name())},
+            {"spp", stats.sppCompleted},
+            {"samples", stats.samples},
+            {"seconds", stats.seconds},
+            {"build_seconds", accel->stats().buildSeconds},
+            {"resolution", {s.width, s.height}},
+            {"threads", stats.threads},
+            {"seed", s.seed},
+            {"outputs", pngPath.empty() ? nlohmann::json{{"exr", exrPath}} : nlohmann::json{{"exr", exrPath}, {"png", pngPath}}},
+            {"samples_per_second", samplesPerSecond},
+            {"nonfinite_dropped", stats.nonFiniteDropped},
+            {"interrupted", stats.interrupted},
+        };
+        std::cout << j.dump() << std::endl;
+    }
+    return stats.interrupted ? 130 : 0;
+}
+
+std::string joined(const std::vector<std::string>& v) {
+    std::string s;
+    for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
+    return s;
+}
+
+}  // namespace
+
+void printError(const std::string& message) { std::cerr << "tessera: error: " << message << std::endl; }
+void printWarning(const std::string& message) { std::cerr << "tessera: warning: " << message << std::endl; }
+
+Runner addRenderCommand(CLI::App& app) {
+    auto a = std::make_shared<RenderArgs>();
+    CLI::App* cmd = app.add_subcommand("render", "Render a glTF 2.0 scene to EXR (and PNG)");
+    cmd->add_option("SCENE", a->scene, "scene file (.gltf or .glb)")->required();
+    cmd->add_option("-o,--output", a->output, "output EXR (default: out/<scene>.exr)");
+    cmd->add_option("--png", a->png, "also write a display-referred PNG here (default: the EXR path with .png)");
+    cmd->add_flag("--no-png", a->noPng, "write only the EXR");
+    auto* spp = cmd->add_option("--spp", a->spp, "samples per pixel (default: the scene's, else 16)")->check(CLI::Range(1, 1 << 30));
+    cmd->add_option("--time", a->timeLimit, "render progressive passes for this many seconds instead of a fixed spp")
+        ->check(CLI::PositiveNumber)->excludes(spp);
+    cmd->add_option("--threads", a->threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+    cmd->add_option("--seed", a->seed, "random seed (default: the scene's, else 0)")->check(CLI::NonNegativeNumber);
+    cmd->add_option("--resolution", a->resolution, "image size WxH, e.g. 640x480 (default: the scene's)");
+    cmd->add_option("--integrator", a->integrator, "light transport algorithm: " + joined(integratorNames()) + " (default: ptnee)");
+    cmd->add_option("--accel", a->accel, "acceleration structure: " + joined(accelNames()) + " (default: embree)");
+    cmd->add_option("--max-depth", a->maxDepth, "maximum number of bounces, -1 = unlimited (Russian roulette ends paths)")
+        ->check(CLI::Range(-1, 1 << 20));
+    cmd->add_option("--look-at", a->lookAt, "camera EX,EY,EZ,TX,TY,TZ[,UX,UY,UZ]: replaces the scene's camera");
+    cmd->add_option("--fov", a->fovDeg, "vertical field of view in degrees (with or without --look-at)")->check(CLI::Range(0.001, 179.0));
+    cmd->add_option("--display", a->display, "OCIO display for the PNG (default: sRGB)");
+    cmd->add_option("--view", a->view, "OCIO view for the PNG: Standard, \"ACES 1.0 SDR-video\", Raw (default: Standard)");
+    cmd->add_flag("--quiet", a->quiet, "no progress output");
+    cmd->add_flag("--json", a->json, "print one JSON object with the run's figures on stdout when done");
+    cmd->footer("Ctrl-C stops at the next tile and still writes what was rendered (exit code 130); press it\n"
+                "twice to quit at once. Outputs are written to a temporary file and renamed, never half-written.");
+    return [a] { return runRender(*a); };
+}
+
+}  // namespace tessera::app

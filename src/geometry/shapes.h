@@ -1,0 +1,49 @@
+#pragma once
+/// \file shapes.h
+/// The two shapes Tessera models: triangle meshes and analytic spheres, both in world space, and the
+/// SceneGeometry that every acceleration structure is built from.
+#include <glm/vec3.hpp>
+#include <string>
+#include <vector>
+
+#include "core/bounds.h"
+#include "core/math.h"
+
+namespace tessera {
+
+inline constexpr uint32_t kInvalidId = 0xffffffffu;
+
+struct TriangleMesh {
+    std::string name;               ///< for messages, e.g. "meshes[2].primitives[0]"
+    std::vector<Vec3f> positions;   ///< world space
+    std::vector<Vec3f> normals;     ///< optional per-vertex shading normals (world space, unit)
+    std::vector<glm::uvec3> triangles;
+    uint32_t materialId = 0;
+};
+
+struct Sphere {
+    std::string name;
+    Vec3f center{0.f};
+    float radius = 1.f;
+    uint32_t materialId = 0;
+};
+
+/// Everything an acceleration structure sees. Geometry ids: mesh i has geomId i; all spheres together
+/// form geometry `meshes.size()` with primId = sphere index (this is also how Embree numbers them).
+struct SceneGeometry {
+    std::vector<TriangleMesh> meshes;
+    std::vector<Sphere> spheres;
+
+    uint32_t sphereGeomId() const { return uint32_t(meshes.size()); }
+    size_t primitiveCount() const;
+    Bounds3f bounds() const;
+};
+
+inline Bounds3f sphereBounds(const Sphere& s) {
+    Bounds3f b;
+    b.lower = s.center - Vec3f(s.radius);
+    b.upper = s.center + Vec3f(s.radius);
+    return b;
+}
+
+}  // namespace tessera

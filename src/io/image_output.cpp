@@ -1,0 +1,178 @@
+#include "io/image_output.h"
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+
+#include "core/error.h"
+#include "io/display_transform.h"
+
+namespace tessera::io {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+void checkArguments(const std::string& path, int width, int height, const float* rgba) {
+    // A caller bug, not user input: the renderer never produces an empty film.
+    if (width <= 0 || height <= 0 || rgba == nullptr) {
+        throw std::invalid_argument(path + ": image write with size " + std::to_string(width) +
+                                    "x" + std::to_string(height) + " or no pixels");
+    }
+}
+
+/// A temporary name beside `path`, unique per process and per call, so that two processes (or two
+/// threads) writing the same destination never share a temporary file.
+std::string temporaryPath(const std::string& path) {
+    static std::atomic<unsigned> counter{0};
+    return path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+}
+
+/// Removes the temporary file on every exit path unless the rename succeeded, including exits by
+/// exceptions thrown from inside OIIO or the allocator.
+class TemporaryFileGuard {
+public:
+    explicit TemporaryFileGuard(std::string path) : path_(std::move(path)) {}
+    ~TemporaryFileGuard() {
+        if (!path_.empty()) {
+            std::error_code ignored;
+            fs::remove(path_, ignored);
+        }
+    }
+    void release() { path_.clear(); }
+    TemporaryFileGuard(const TemporaryFileGuard&) = delete;
+    TemporaryFileGuard& operator=(const TemporaryFileGuard&) = delete;
+
+private:
+    std::string path_;
+};
+
+/// Writes one image described by `spec` (pixels of type spec.format, packed) to `path` atomically:
+/// the file is written under a temporary name in the same directory, then renamed over `path`.
+/// rename() within one file system is atomic, so readers see either the old file or the complete
+/// new one. The format is chosen from `path`'s extension, not the temporary name's.
+void writeAtomically(const std::string& path, const OIIO::ImageSpec& spec, const void* pixels) {
+    const fs::path parent = fs::path(path).parent_path();
+    if (!parent.empty()) {
+        std::error_code ec;
+        fs::create_directories(parent, ec);
+        if (ec) {
+            throw InputError(path + ": cannot create directory " + parent.string() + ": " +
+                             ec.message());
+        }
+    }
+
+    const std::string tmpPath = temporaryPath(path);
+    TemporaryFileGuard guard(tmpPath);  // Declared before `out`, so `out` is closed first.
+    {
+        std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path);
+        if (!out) {
+            throw InputError(path + ": cannot write this image format: " + OIIO::geterror());
+        }
+        auto fail = [&](const char* what) {
+            std::string detail = out->geterror();
+            if (detail.empty()) detail = OIIO::geterror();
+            throw InputError(path + ": " + what + ": " + detail);
+        };
+        if (!out->open(tmpPath, spec)) fail("cannot open for writing");
+        if (!out->write_image(spec.format, pixels)) fail("cannot write pixels");
+        // close() flushes: a full disk is often only reported here.
+        if (!out->close()) fail("cannot finish writing");
+    }
+
+    std::error_code ec;
+    fs::rename(tmpPath, path, ec);
+    if (ec) throw InputError(path + ": cannot replace file: " + ec.message());
+    guard.release();
+}
+
+void addMetadata(OIIO::ImageSpec& spec, const Metadata& metadata) {
+    for (const auto& [name, value] : metadata) spec.attribute(name, value);
+}
+
+/// Nearest 8-bit level of a display value; NaN (which survives clamping) becomes black.
+std::uint8_t quantize(float value) {
+    if (!(value > 0.0f)) return 0;
+    if (value >= 1.0f) return 255;
+    return static_cast<std::uint8_t>(value * 255.0f + 0.5f);
+}
+
+}  // namespace
+
+void writeExr(const std::string& path, int width, int height, const float* rgba,
+              const Metadata& metadata) {
+    checkArguments(path, width, height, rgba);
+    OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::FLOAT);  // Names R, G, B, A.
+    // Lossless and readable everywhere; explicit so output never depends on OIIO's default.
+    spec.attribute("compression", "zip");
+    addMetadata(spec, metadata);
+    writeAtomically(path, spec, rgba);
+}
+
+void writePng(const std::string& path, int width, int height, const float* rgba,
+              const DisplayTransform& transform, const Metadata& metadata) {
+    checkArguments(path, width, height, rgba);
+    const std::size_t pixelCount = std::size_t(width) * std::size_t(height);
+    std::vector<float> display(rgba, rgba + 4 * pixelCount);
+    transform.apply(display.data(), width, height);
+
+    std::vector<std::uint8_t> rgb(3 * pixelCount);
+    for (std::size_t i = 0; i < pixelCount; ++i) {
+        for (int c = 0; c < 3; ++c) rgb[3 * i + c] = quantize(display[4 * i + c]);
+    }
+
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    addMetadata(spec, metadata);
+    writeAtomically(path, spec, rgb.data());
+}
+
+Image readImage(const std::string& path) {
+    OIIO::ImageBuf file(path);
+    if (!file.read(/* subimage = */ 0, /* miplevel = */ 0, /* force = */ true,
+                   OIIO::TypeDesc::FLOAT)) {
+        std::string detail = file.geterror();
+        if (detail.empty()) detail = OIIO::geterror();
+        throw InputError(path + ": cannot read image: " + detail);
+    }
+    const OIIO::ImageSpec& spec = file.spec();
+    const int channels = spec.nchannels;
+    const int alpha = spec.alpha_channel;
+
+    // channels() builds the RGBA image in one pass: an index picks a source channel, -1 takes the
+    // constant from `fill`.
+    int order[4] = {0, 1, 2, alpha};
+    const float fill[4] = {0.0f, 0.0f, 0.0f, 1.0f};
+    if (channels < 3) {
+        // Grey or grey + alpha. A lone channel is grey even if its name says alpha.
+        order[0] = order[1] = order[2] = 0;
+        order[3] = (channels == 2) ? 1 : -1;
+    } else if (alpha < 3) {
+        order[3] = -1;  // No alpha, or an "alpha" among the first three: treat as opaque RGB.
+    }
+    OIIO::ImageBuf rgbaBuf = OIIO::ImageBufAlgo::channels(file, 4, order, fill);
+    if (rgbaBuf.has_error()) {
+        throw InputError(path + ": cannot convert to RGBA: " + rgbaBuf.geterror());
+    }
+
+    Image image;
+    image.width = spec.width;
+    image.height = spec.height;
+    image.rgba.resize(4 * std::size_t(image.width) * std::size_t(image.height));
+    if (!rgbaBuf.get_pixels(rgbaBuf.roi(), OIIO::TypeDesc::FLOAT, image.rgba.data())) {
+        throw InputError(path + ": cannot read pixels: " + rgbaBuf.geterror());
+    }
+    for (const OIIO::ParamValue& param : spec.extra_attribs) {
+        image.metadata.emplace_back(param.name().string(), param.get_string());
+    }
+    return image;
+}
+
+}  // namespace tessera::io

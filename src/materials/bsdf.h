@@ -1,0 +1,45 @@
+#pragma once
+/// \file bsdf.h
+/// BSDF evaluation and sampling in the local shading frame (z = shading normal). Directions point
+/// away from the surface: `woLocal` towards the previous vertex, `wiLocal` towards the next.
+/// All BSDFs are two-sided: the frame is mirrored when wo lies below the shading normal.
+#include "core/math.h"
+#include "materials/material.h"
+
+namespace tessera {
+
+struct BsdfSample {
+    Vec3f wiLocal{0.f};
+    Rgb weight{0.f};   ///< f · |cos θi| / pdfW (or the delta lobe's throughput)
+    float pdfW = 0.f;  ///< solid-angle density; for delta lobes the discrete probability of the lobe
+    bool isDelta = false;
+    float eta = 1.f;   ///< η_t / η_i of a refraction (1 for reflection): lets Russian roulette undo the 1/η² radiance scaling
+};
+
+/// True when the material scatters only into discrete directions (eval and pdf are zero everywhere).
+inline bool isDeltaMaterial(const Material& m) {
+    return m.type == MaterialType::Mirror || m.type == MaterialType::Dielectric;
+}
+
+/// f(wo, wi) without the cosine factor.
+Rgb evalBsdf(const Material& m, const Vec3f& woLocal, const Vec3f& wiLocal, TransportMode mode);
+/// Solid-angle density with which sampleBsdf generates wi given wo.
+float pdfBsdfW(const Material& m, const Vec3f& woLocal, const Vec3f& wiLocal);
+/// Samples wi given wo; `uLobe` picks reflection/refraction, `u` the direction. False when no
+/// direction is produced (e.g. wo grazing).
+bool sampleBsdf(const Material& m, const Vec3f& woLocal, float uLobe, Vec2f u, TransportMode mode, BsdfSample& out);
+
+/// Unpolarised Fresnel reflectance of a dielectric interface; eta = η_inside / η_outside, cosThetaI
+/// signed (negative: arriving from inside). Exact formula (Born & Wolf; pbrt-v4 eq. 9.5 form).
+float fresnelDielectric(float cosThetaI, float eta);
+
+namespace ggx {
+/// Trowbridge–Reitz / GGX normal distribution (Walter et al. 2007, eq. 33).
+float D(const Vec3f& wm, float alpha);
+/// Smith Λ for GGX (Heitz 2014, "Understanding the Masking-Shadowing Function", eq. 72).
+float lambda(const Vec3f& w, float alpha);
+/// Visible-normal sampling (Heitz 2018, "Sampling the GGX Distribution of Visible Normals", JCGT 7(4)).
+Vec3f sampleVisibleNormal(const Vec3f& wo, float alpha, Vec2f u);
+}  // namespace ggx
+
+}  // namespace tessera

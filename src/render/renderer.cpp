@@ -1,0 +1,120 @@
+#include "render/renderer.h"
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/info.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/task_arena.h>
+#include <oneapi/tbb/task_scheduler_observer.h>
+
+#include <chrono>
+
+#include "core/fp_env.h"
+
+namespace tessera {
+namespace {
+
+/// Sets FTZ/DAZ in every thread that joins the arena (MXCSR is per thread).
+class FlushToZeroObserver : public tbb::task_scheduler_observer {
+public:
+    explicit FlushToZeroObserver(tbb::task_arena& arena) : tbb::task_scheduler_observer(arena) { observe(true); }
+    ~FlushToZeroObserver() override { observe(false); }
+    void on_scheduler_entry(bool) override { enableFlushToZero(); }
+};
+
+struct Tile {
+    int x0, y0, x1, y1;
+};
+
+constexpr uint32_t kMaxPassSpp = 16;
+
+}  // namespace
+
+RenderStats renderImage(const RenderContext& ctx, const Integrator& integrator, Film& film, const RenderOptions& opt) {
+    auto start = std::chrono::steady_clock::now();
+    auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+    const int width = film.width(), height = film.height();
+    const int ts = std::max(1, opt.tileSize);
+    std::vector<Tile> tiles;
+    for (int y = 0; y < height; y += ts)
+        for (int x = 0; x < width; x += ts) tiles.push_back({x, y, std::min(x + ts, width), std::min(y + ts, height)});
+    std::vector<SplatSink> splats(tiles.size());
+    std::vector<uint8_t> tileDone(tiles.size(), 0);
+    std::atomic<uint64_t> nonFinite{0};
+
+    RenderStats stats;
+    stats.threads = opt.threads > 0 ? opt.threads : tbb::info::default_concurrency();
+    tbb::task_arena arena(stats.threads);
+    FlushToZeroObserver ftz(arena);
+
+    const bool timed = opt.timeLimitSeconds > 0.0;
+    const uint32_t target = timed ? 0xffffffffu : uint32_t(std::max(0, opt.spp));
+    uint32_t s0 = 0, passSpp = 1;
+    uint64_t pixelsTotal = uint64_t(width) * uint64_t(height);
+
+    while (s0 < target) {
+        if (timed && s0 > 0) {
+            double used = elapsed(), perSpp = used / double(s0), left = opt.timeLimitSeconds - used;
+            if (left <= 0.0) break;
+            // Stop at a pass boundary: never start a pass predicted to overrun by more than one spp.
+            passSpp = uint32_t(std::clamp(left / std::max(perSpp, 1e-9), 1.0, double(passSpp)));
+        }
+        uint32_t n = std::min(passSpp, target - s0);
+        std::fill(tileDone.begin(), tileDone.end(), 0);
+        arena.execute([&] {
+            enableFlushToZero();
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+                for (size_t t = r.begin(); t != r.end(); ++t) {
+                    if (opt.cancel && opt.cancel->load(std::memory_order_relaxed)) return;
+                    const Tile& tile = tiles[t];
+                    SplatSink& sink = splats[t];
+                    uint64_t bad = 0;
+                    for (int y = tile.y0; y < tile.y1; ++y)
+                        for (int x = tile.x0; x < tile.x1; ++x)
+                            for (uint32_t s = s0; s < s0 + n; ++s) {
+                                Sampler sampler(Vec2i(x, y), s, opt.seed);
+                                Vec2f raster = Vec2f(float(x), float(y)) + sampler.get2D();
+                                Rgb L = integrator.sample(ctx, Vec2i(x, y), raster, sampler, sink);
+                                if (isFinite(L)) film.addSample(x, y, L);
+                                else ++bad;
+                            }
+                    if (bad) nonFinite.fetch_add(bad, std::memory_order_relaxed);
+                    tileDone[t] = 1;
+                    if (opt.progress) opt.progress->advance(uint64_t(tile.x1 - tile.x0) * uint64_t(tile.y1 - tile.y0) * n);
+                }
+            }, tbb::simple_partitioner());
+        });
+        // Merge splats in tile order: the sums then do not depend on which thread ran which tile.
+        bool complete = true;
+        for (size_t t = 0; t < tiles.size(); ++t) {
+            if (!tileDone[t]) {
+                complete = false;
+                continue;
+            }
+            uint64_t tilePixels = uint64_t(tiles[t].x1 - tiles[t].x0) * uint64_t(tiles[t].y1 - tiles[t].y0);
+            stats.samples += tilePixels * n;
+            for (const SplatSink::Entry& e : splats[t].entries()) {
+                if (isFinite(e.value)) film.addSplat(e.pixelIndex, e.value);
+                else nonFinite.fetch_add(1, std::memory_order_relaxed);
+            }
+            splats[t].clear();
+        }
+        if (!complete) {
+            stats.interrupted = true;
+            break;
+        }
+        s0 += n;
+        passSpp = std::min(kMaxPassSpp, passSpp * (s0 >= 2 ? 2u : 1u));
+        if (opt.cancel && opt.cancel->load()) {
+            stats.interrupted = true;
+            break;
+        }
+    }
+    stats.sppCompleted = s0;
+    // Splats are estimates per camera sample of the whole image: divide by samples per pixel taken.
+    film.setSplatSppDouble(pixelsTotal > 0 ? double(stats.samples) / double(pixelsTotal) : 0.0);
+    stats.nonFiniteDropped = nonFinite.load();
+    stats.seconds = elapsed();
+    return stats;
+}
+
+}  // namespace tessera

@@ -1,0 +1,441 @@
+#include "scene/gltf_loader.h"
+
+#include <tiny_gltf.h>
+
+#include <filesystem>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <set>
+
+#include "core/error.h"
+
+namespace tessera {
+namespace {
+
+namespace gl = tinygltf;
+
+/// Image decoding is not needed (Tessera has no textures yet): accept the bytes without decoding,
+/// which also keeps image decoders away from untrusted files.
+bool skipImage(gl::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+    return true;
+}
+
+std::string idx(const char* array, size_t i) { return std::string(array) + "[" + std::to_string(i) + "]"; }
+
+class Loader {
+public:
+    Loader(std::string path, std::vector<std::string>& warnings) : path_(std::move(path)), warnings_(warnings) {}
+
+    Scene load() {
+        readModel();
+        checkRequiredExtensions();
+        scene_.sourcePath = path_;
+        readRenderSettings();
+        readMaterials();
+        traverseScene();
+        if (droppedTriangles_ > 0)
+            warnings_.push_back(path_ + ": dropped " + std::to_string(droppedTriangles_) +
+                                " degenerate or non-finite triangle(s)");
+        scene_.finalize();
+        return std::move(scene_);
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& element, const std::string& problem) const {
+        throw SceneError(path_, element, problem);
+    }
+
+    void readModel() {
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(path_, ec)) fail("", "no such file");
+        gl::TinyGLTF loader;
+        loader.SetImageLoader(skipImage, nullptr);
+        std::string err, warn;
+        std::string ext = std::filesystem::path(path_).extension().string();
+        for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+        bool ok = ext == ".glb" ? loader.LoadBinaryFromFile(&model_, &err, &warn, path_)
+                                : loader.LoadASCIIFromFile(&model_, &err, &warn, path_);
+        if (!ok || !err.empty()) {
+            std::string msg = err.empty() ? "cannot parse the file" : err;
+            while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
+            for (char& c : msg)
+                if (c == '\n') c = ';';
+            fail("", "invalid glTF: " + msg);
+        }
+    }
+
+    void checkRequiredExtensions() const {
+        std::vector<std::string> known = supportedGltfExtensions();
+        for (const std::string& e : model_.extensionsRequired)
+            if (std::find(known.begin(), known.end(), e) == known.end())
+                fail("extensionsRequired", "unsupported required extension '" + e + "'");
+    }
+
+    double number(const gl::Value& obj, const char* key, const std::string& element, double fallback) const {
+        if (!obj.Has(key)) return fallback;
+        const gl::Value& v = obj.Get(key);
+        if (!v.IsNumber()) fail(element, std::string("'") + key + "' must be a number");
+        double d = v.GetNumberAsDouble();
+        if (!std::isfinite(d)) fail(element, std::string("'") + key + "' must be finite");
+        return d;
+    }
+
+    void readRenderSettings() {
+        auto it = model_.extensions.find("TESSERA_render");
+        if (it == model_.extensions.end()) return;
+        const gl::Value& v = it->second;
+        const std::string el = "extensions.TESSERA_render";
+        if (!v.IsObject()) fail(el, "must be an object");
+        RenderSettings& s = scene_.settings;
+        if (v.Has("resolution")) {
+            const gl::Value& r = v.Get("resolution");
+            if (!r.IsArray() || r.ArrayLen() != 2 || !r.Get(0).IsNumber() || !r.Get(1).IsNumber())
+                fail(el, "'resolution' must be [width, height]");
+            double w = r.Get(0).GetNumberAsDouble(), h = r.Get(1).GetNumberAsDouble();
+            if (!(w >= 1 && h >= 1 && w <= 65536 && h <= 65536) || w != std::floor(w) || h != std::floor(h))
+                fail(el, "'resolution' must be two integers in [1, 65536]");
+            s.width = int(w);
+            s.height = int(h);
+        }
+        double spp = number(v, "spp", el, s.spp);
+        if (!(spp >= 1 && spp <= 1e9)) fail(el, "'spp' must be in [1, 1e9]");
+        s.spp = int(spp);
+        double depth = number(v, "maxDepth", el, s.maxDepth);
+        if (!(depth >= -1 && depth <= 1e6)) fail(el, "'maxDepth' must be -1 (unlimited) or a bounce count");
+        s.maxDepth = int(depth);
+        double seed = number(v, "seed", el, 0.0);
+        if (seed < 0) fail(el, "'seed' must be non-negative");
+        s.seed = uint64_t(seed);
+        if (v.Has("integrator")) {
+            if (!v.Get("integrator").IsString()) fail(el, "'integrator' must be a string");
+            s.integrator = v.Get("integrator").Get<std::string>();
+        }
+    }
+
+    void readMaterials() {
+        for (size_t i = 0; i < model_.materials.size(); ++i) {
+            const gl::Material& gm = model_.materials[i];
+            const std::string el = idx("materials", i);
+            Material m;
+            m.name = gm.name.empty() ? el : gm.name;
+            const std::vector<double>& bc = gm.pbrMetallicRoughness.baseColorFactor;
+            if (bc.size() < 3) fail(el, "baseColorFactor must have 4 components");
+            for (int c = 0; c < 3; ++c) {
+                if (!(bc[c] >= 0.0 && bc[c] <= 1.0)) fail(el, "baseColorFactor components must be in [0, 1]");
+                m.albedo[c] = float(bc[c]);
+            }
+            double metallic = gm.pbrMetallicRoughness.metallicFactor;
+            double roughness = gm.pbrMetallicRoughness.roughnessFactor;
+            if (!(metallic >= 0 && metallic <= 1)) fail(el, "metallicFactor must be in [0, 1]");
+            if (!(roughness >= 0 && roughness <= 1)) fail(el, "roughnessFactor must be in [0, 1]");
+            double transmission = 0.0, ior = 1.5, strength = 1.0;
+            if (auto t = gm.extensions.find("KHR_materials_transmission"); t != gm.extensions.end())
+                transmission = number(t->second, "transmissionFactor", el + ".extensions.KHR_materials_transmission", 0.0);
+            if (auto t = gm.extensions.find("KHR_materials_ior"); t != gm.extensions.end()) {
+                ior = number(t->second, "ior", el + ".extensions.KHR_materials_ior", 1.5);
+                if (!(ior >= 1.0 && ior <= 10.0)) fail(el + ".extensions.KHR_materials_ior", "ior must be in [1, 10]");
+            }
+            if (auto t = gm.extensions.find("KHR_materials_emissive_strength"); t != gm.extensions.end()) {
+                strength = number(t->second, "emissiveStrength", el + ".extensions.KHR_materials_emissive_strength", 1.0);
+                if (strength < 0) fail(el + ".extensions.KHR_materials_emissive_strength", "emissiveStrength must be >= 0");
+            }
+            if (transmission > 0.0) {
+                m.type = MaterialType::Dielectric;
+                m.ior = float(ior);
+            } else if (metallic >= 0.5) {
+                m.type = roughness == 0.0 ? MaterialType::Mirror : MaterialType::RoughConductor;
+                m.alpha = float(roughness * roughness);
+            }
+            if (gm.emissiveFactor.size() >= 3) {
+                for (int c = 0; c < 3; ++c) {
+                    double e = gm.emissiveFactor[c] * strength;
+                    if (!(e >= 0.0) || !std::isfinite(e)) fail(el, "emission must be finite and non-negative");
+                    m.emission[c] = float(e);
+                }
+            }
+            m.doubleSided = gm.doubleSided;
+            scene_.materials.push_back(m);
+        }
+        // Primitives without a material get glTF's "default material" (baseColor 1, metallic 1)
+        // replaced by a grey Lambertian: a white rough metal is never what an untextured mesh means.
+        defaultMaterial_ = uint32_t(scene_.materials.size());
+        Material def;
+        def.name = "default";
+        def.albedo = Rgb(0.8f);
+        scene_.materials.push_back(def);
+    }
+
+    Mat4d localTransform(const gl::Node& node, const std::string& el) const {
+        if (node.matrix.size() == 16) {
+            Mat4d m;
+            for (int c = 0; c < 4; ++c)
+                for (int r = 0; r < 4; ++r) m[c][r] = node.matrix[size_t(c * 4 + r)];  // column-major
+            return m;
+        }
+        if (!node.matrix.empty()) fail(el, "matrix must have 16 numbers");
+        Mat4d t(1.0);
+        if (!node.translation.empty()) {
+            if (node.translation.size() != 3) fail(el, "translation must have 3 numbers");
+            t = glm::translate(Mat4d(1.0), Vec3d(node.translation[0], node.translation[1], node.translation[2]));
+        }
+        if (!node.rotation.empty()) {
+            if (node.rotation.size() != 4) fail(el, "rotation must have 4 numbers");
+            glm::dquat q(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);  // w, x, y, z
+            double len = glm::length(q);
+            if (!(len > 0.0) || !std::isfinite(len)) fail(el, "rotation must be a non-zero quaternion");
+            t = t * glm::mat4_cast(q / len);
+        }
+        if (!node.scale.empty()) {
+            if (node.scale.size() != 3) fail(el, "scale must have 3 numbers");
+            t = glm::scale(t, Vec3d(node.scale[0], node.scale[1], node.scale[2]));
+        }
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 4; ++r)
+                if (!std::isfinite(t[c][r])) fail(el, "transform must be finite");
+        return t;
+    }
+
+    void traverseScene() {
+        std::vector<int> roots;
+        if (!model_.scenes.empty()) {
+            int s = model_.defaultScene >= 0 ? model_.defaultScene : 0;
+            if (s >= int(model_.scenes.size())) fail("scene", "default scene index out of range");
+            roots = model_.scenes[size_t(s)].nodes;
+        } else {
+            // No scenes array: render every node that is nobody's child.
+            std::vector<bool> isChild(model_.nodes.size(), false);
+            for (const gl::Node& n : model_.nodes)
+                for (int c : n.children)
+                    if (c >= 0 && size_t(c) < isChild.size()) isChild[size_t(c)] = true;
+            for (size_t i = 0; i < model_.nodes.size(); ++i)
+                if (!isChild[i]) roots.push_back(int(i));
+        }
+        for (int r : roots) visitNode(r, Mat4d(1.0), 0);
+    }
+
+    void visitNode(int index, const Mat4d& parent, int depth) {
+        const std::string el = idx("nodes", size_t(std::max(index, 0)));
+        if (index < 0 || size_t(index) >= model_.nodes.size()) fail(el, "node index out of range");
+        // glTF requires the node hierarchy to be a forest; a cycle or a shared child would otherwise
+        // recurse forever or duplicate geometry.
+        if (!visited_.insert(index).second) fail(el, "node is reachable twice (cycle or shared child)");
+        if (depth > 1024) fail(el, "node hierarchy deeper than 1024");
+        const gl::Node& node = model_.nodes[size_t(index)];
+        Mat4d world = parent * localTransform(node, el);
+        if (node.mesh >= 0) readMesh(node.mesh, world, el);
+        if (node.camera >= 0) readCamera(node.camera, world, el);
+        if (auto it = node.extensions.find("TESSERA_sphere"); it != node.extensions.end())
+            readSphere(it->second, world, el + ".extensions.TESSERA_sphere");
+        for (int c : node.children) visitNode(c, world, depth + 1);
+    }
+
+    void readCamera(int index, const Mat4d& world, const std::string& nodeEl) {
+        const std::string el = idx("cameras", size_t(std::max(index, 0)));
+        if (size_t(index) >= model_.cameras.size()) fail(nodeEl, "camera index out of range");
+        if (scene_.camera) return;  // the first camera in traversal order is used
+        const gl::Camera& cam = model_.cameras[size_t(index)];
+        if (cam.type != "perspective") fail(el, "only perspective cameras are supported (got '" + cam.type + "')");
+        double yfov = cam.perspective.yfov;
+        if (!(yfov > 0.0 && yfov < 3.14159)) fail(el, "yfov must be in (0, pi)");
+        CameraDesc d;
+        // Remove scale from the camera frame: only position and orientation matter.
+        Mat4d m = world;
+        for (int c = 0; c < 3; ++c) {
+            Vec3d axis(m[c]);
+            double len = glm::length(axis);
+            if (!(len > 0.0)) fail(nodeEl, "camera transform is singular");
+            m[c] = glm::dvec4(axis / len, 0.0);
+        }
+        d.cameraToWorld = Mat4f(m);
+        d.yfov = float(yfov);
+        d.znear = cam.perspective.znear > 0.0 ? float(cam.perspective.znear) : 0.01f;
+        if (auto it = cam.extensions.find("TESSERA_thin_lens"); it != cam.extensions.end()) {
+            const std::string tel = el + ".extensions.TESSERA_thin_lens";
+            d.apertureRadius = float(number(it->second, "apertureRadius", tel, 0.0));
+            d.focusDistance = float(number(it->second, "focusDistance", tel, 1.0));
+            if (d.apertureRadius < 0.f) fail(tel, "apertureRadius must be >= 0");
+            if (!(d.focusDistance > 0.f)) fail(tel, "focusDistance must be > 0");
+        }
+        scene_.camera = d;
+    }
+
+    void readSphere(const gl::Value& v, const Mat4d& world, const std::string& el) {
+        if (!v.IsObject()) fail(el, "must be an object");
+        double radius = number(v, "radius", el, -1.0);
+        if (!(radius > 0.0)) fail(el, "'radius' must be a positive number");
+        double mat = number(v, "material", el, -1.0);
+        uint32_t materialId = defaultMaterial_;
+        if (v.Has("material")) {
+            if (!(mat >= 0 && mat < double(model_.materials.size())) || mat != std::floor(mat))
+                fail(el, "'material' must index materials[]");
+            materialId = uint32_t(mat);
+        }
+        // Spheres stay spheres only under uniform scale.
+        double sx = glm::length(Vec3d(world[0])), sy = glm::length(Vec3d(world[1])), sz = glm::length(Vec3d(world[2]));
+        if (std::abs(sx - sy) > 1e-6 * sx || std::abs(sx - sz) > 1e-6 * sx)
+            fail(el, "a sphere's node transform must scale uniformly");
+        Sphere s;
+        s.name = el;
+        s.center = Vec3f(Vec3d(world[3]));
+        s.radius = float(radius * sx);
+        s.materialId = materialId;
+        if (!(s.radius > 0.f) || !std::isfinite(s.radius) || !isFinite(s.center)) fail(el, "sphere is degenerate after its transform");
+        scene_.geometry.spheres.push_back(s);
+    }
+
+    /// Byte view of accessor `a` after checking type, bounds and layout.
+    struct View {
+        const unsigned char* data = nullptr;
+        size_t stride = 0, count = 0;
+    };
+    View accessorView(int accessorIndex, const std::string& el, int type, std::initializer_list<int> componentTypes) const {
+        if (accessorIndex < 0 || size_t(accessorIndex) >= model_.accessors.size()) fail(el, "accessor index out of range");
+        const gl::Accessor& a = model_.accessors[size_t(accessorIndex)];
+        const std::string ael = idx("accessors", size_t(accessorIndex));
+        if (a.sparse.isSparse) fail(ael, "sparse accessors are not supported");
+        if (a.type != type) fail(ael, "unexpected accessor type for " + el);
+        if (std::find(componentTypes.begin(), componentTypes.end(), a.componentType) == componentTypes.end())
+            fail(ael, "unexpected component type " + std::to_string(a.componentType) + " for " + el);
+        if (a.bufferView < 0 || size_t(a.bufferView) >= model_.bufferViews.size()) fail(ael, "bufferView index out of range");
+        const gl::BufferView& bv = model_.bufferViews[size_t(a.bufferView)];
+        const std::string bel = idx("bufferViews", size_t(a.bufferView));
+        if (bv.buffer < 0 || size_t(bv.buffer) >= model_.buffers.size()) fail(bel, "buffer index out of range");
+        const gl::Buffer& buf = model_.buffers[size_t(bv.buffer)];
+        size_t elemSize = size_t(gl::GetComponentSizeInBytes(uint32_t(a.componentType))) *
+                          size_t(gl::GetNumComponentsInType(uint32_t(a.type)));
+        size_t stride = bv.byteStride > 0 ? bv.byteStride : elemSize;
+        if (stride < elemSize) fail(bel, "byteStride smaller than the element size");
+        if (bv.byteOffset > buf.data.size() || bv.byteLength > buf.data.size() - bv.byteOffset)
+            fail(bel, "view exceeds its buffer (" + std::to_string(buf.data.size()) + " bytes)");
+        if (a.count > 0) {
+            // 128-bit arithmetic is unnecessary: count and stride are bounded by the buffer size
+            // check below, done in an order that cannot overflow.
+            if (a.byteOffset > bv.byteLength) fail(ael, "byteOffset beyond its bufferView");
+            size_t avail = bv.byteLength - a.byteOffset;
+            if (avail < elemSize || (a.count - 1) > (avail - elemSize) / stride)
+                fail(ael, "accessor of " + std::to_string(a.count) + " elements exceeds its bufferView");
+        }
+        return View{buf.data.data() + bv.byteOffset + a.byteOffset, stride, a.count};
+    }
+
+    std::vector<Vec3f> readVec3(int accessor, const std::string& el) const {
+        View v = accessorView(accessor, el, TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT});
+        std::vector<Vec3f> out(v.count);
+        for (size_t i = 0; i < v.count; ++i) std::memcpy(&out[i], v.data + i * v.stride, sizeof(Vec3f));
+        return out;
+    }
+
+    std::vector<uint32_t> readIndices(int accessor, const std::string& el) const {
+        View v = accessorView(accessor, el, TINYGLTF_TYPE_SCALAR,
+                              {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                               TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
+        int ct = model_.accessors[size_t(accessor)].componentType;
+        std::vector<uint32_t> out(v.count);
+        for (size_t i = 0; i < v.count; ++i) {
+            const unsigned char* p = v.data + i * v.stride;
+            if (ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) out[i] = *p;
+            else if (ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) { uint16_t s; std::memcpy(&s, p, 2); out[i] = s; }
+            else std::memcpy(&out[i], p, 4);
+        }
+        return out;
+    }
+
+    void readMesh(int meshIndex, const Mat4d& world, const std::string& nodeEl) {
+        if (size_t(meshIndex) >= model_.meshes.size()) fail(nodeEl, "mesh index out of range");
+        const gl::Mesh& gm = model_.meshes[size_t(meshIndex)];
+        // A mirroring transform reverses the winding (glTF 2.0 spec, 3.7.4): flip it back so front
+        // faces, and so one-sided emitters, keep facing the way the artist meant (pbrt-v3 #229).
+        bool flipWinding = glm::determinant(Mat4d(world)) < 0.0;
+        Mat4d normalMatrix = glm::transpose(glm::inverse(world));
+        for (size_t p = 0; p < gm.primitives.size(); ++p) {
+            const gl::Primitive& prim = gm.primitives[p];
+            const std::string el = idx("meshes", size_t(meshIndex)) + "." + idx("primitives", p);
+            int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+            if (mode == TINYGLTF_MODE_POINTS || mode == TINYGLTF_MODE_LINE || mode == TINYGLTF_MODE_LINE_LOOP ||
+                mode == TINYGLTF_MODE_LINE_STRIP) {
+                warnings_.push_back(path_ + ": " + el + ": points and lines are not rendered");
+                continue;
+            }
+            if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN)
+                fail(el, "unknown primitive mode " + std::to_string(mode));
+            auto pos = prim.attributes.find("POSITION");
+            if (pos == prim.attributes.end()) fail(el, "has no POSITION attribute");
+            TriangleMesh mesh;
+            mesh.name = gm.name.empty() ? el : gm.name + " (" + el + ")";
+            mesh.positions = readVec3(pos->second, el + ".attributes.POSITION");
+            if (auto nrm = prim.attributes.find("NORMAL"); nrm != prim.attributes.end()) {
+                mesh.normals = readVec3(nrm->second, el + ".attributes.NORMAL");
+                if (mesh.normals.size() != mesh.positions.size()) fail(el, "NORMAL and POSITION counts differ");
+            }
+            std::vector<uint32_t> indices;
+            if (prim.indices >= 0) {
+                indices = readIndices(prim.indices, el + ".indices");
+            } else {
+                indices.resize(mesh.positions.size());
+                for (size_t i = 0; i < indices.size(); ++i) indices[i] = uint32_t(i);
+            }
+            for (uint32_t i : indices)
+                if (i >= mesh.positions.size())
+                    fail(el, "index " + std::to_string(i) + " out of range (" + std::to_string(mesh.positions.size()) + " vertices)");
+            std::vector<glm::uvec3> tris = assembleTriangles(indices, mode, el);
+            if (prim.material >= 0 && size_t(prim.material) >= model_.materials.size()) fail(el, "material index out of range");
+            mesh.materialId = prim.material >= 0 ? uint32_t(prim.material) : defaultMaterial_;
+
+            for (Vec3f& v : mesh.positions) v = Vec3f(world * glm::dvec4(Vec3d(v), 1.0));
+            for (Vec3f& n : mesh.normals) {
+                Vec3f t = Vec3f(Mat4d(normalMatrix) * glm::dvec4(Vec3d(n), 0.0));
+                float len = glm::length(t);
+                n = len > 0.f && std::isfinite(len) ? t / len : Vec3f(0.f);
+            }
+            mesh.triangles.reserve(tris.size());
+            for (glm::uvec3 t : tris) {
+                if (flipWinding) std::swap(t.y, t.z);
+                const Vec3f &a = mesh.positions[t.x], &b = mesh.positions[t.y], &c = mesh.positions[t.z];
+                Vec3f n = glm::cross(b - a, c - a);
+                if (!isFinite(a) || !isFinite(b) || !isFinite(c) || !(glm::dot(n, n) > 0.f) || !isFinite(n)) {
+                    ++droppedTriangles_;
+                    continue;
+                }
+                mesh.triangles.push_back(t);
+            }
+            if (scene_.materials[mesh.materialId].isEmissive() && mesh.triangles.empty() && !tris.empty())
+                fail(el, "emitter has zero area");
+            scene_.geometry.meshes.push_back(std::move(mesh));
+        }
+    }
+
+    std::vector<glm::uvec3> assembleTriangles(const std::vector<uint32_t>& ix, int mode, const std::string& el) const {
+        std::vector<glm::uvec3> tris;
+        if (mode == TINYGLTF_MODE_TRIANGLES) {
+            if (ix.size() % 3 != 0) fail(el, "triangle index count " + std::to_string(ix.size()) + " is not a multiple of 3");
+            for (size_t i = 0; i < ix.size(); i += 3) tris.emplace_back(ix[i], ix[i + 1], ix[i + 2]);
+        } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+            for (size_t i = 2; i < ix.size(); ++i)
+                tris.push_back(i % 2 == 0 ? glm::uvec3(ix[i - 2], ix[i - 1], ix[i]) : glm::uvec3(ix[i - 1], ix[i - 2], ix[i]));
+        } else {  // fan
+            for (size_t i = 2; i < ix.size(); ++i) tris.emplace_back(ix[0], ix[i - 1], ix[i]);
+        }
+        return tris;
+    }
+
+    std::string path_;
+    std::vector<std::string>& warnings_;
+    gl::Model model_;
+    Scene scene_;
+    uint32_t defaultMaterial_ = 0;
+    std::set<int> visited_;
+    size_t droppedTriangles_ = 0;
+};
+
+}  // namespace
+
+std::vector<std::string> supportedGltfExtensions() {
+    return {"KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior",
+            "TESSERA_render", "TESSERA_sphere", "TESSERA_thin_lens"};
+}
+
+Scene loadGltfScene(const std::string& path, std::vector<std::string>& warnings) {
+    return Loader(path, warnings).load();
+}
+
+}  // namespace tessera

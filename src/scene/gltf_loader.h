@@ -1,0 +1,26 @@
+#pragma once
+/// \file gltf_loader.h
+/// Loads glTF 2.0 scenes (.gltf, .glb) with tinygltf, plus Tessera's extensions:
+///   TESSERA_render (root): render defaults {resolution [w,h], spp, maxDepth, seed, integrator}
+///   TESSERA_sphere (node): analytic sphere {radius, material} centred at the node's origin
+///   TESSERA_thin_lens (camera): {apertureRadius, focusDistance}
+/// Material mapping (model no more than the scenes need): KHR_materials_transmission > 0 → smooth
+/// dielectric (KHR_materials_ior, default 1.5); metallicFactor ≥ 0.5 → mirror (roughness 0) or GGX
+/// conductor (α = roughness²) with F0 = baseColor; otherwise Lambertian with albedo = baseColor.
+/// emissiveFactor × KHR_materials_emissive_strength makes every surface of the material a light.
+/// Errors throw SceneError naming the file, the element (e.g. "meshes[3].primitives[0]") and the problem.
+#include <string>
+#include <vector>
+
+#include "scene/scene.h"
+
+namespace tessera {
+
+/// The extensions this loader understands; any other entry of extensionsRequired is an error.
+std::vector<std::string> supportedGltfExtensions();
+
+/// Loads `path`. Non-fatal problems (dropped degenerate triangles, ignored point primitives) are
+/// appended to `warnings`, one line per kind of problem.
+Scene loadGltfScene(const std::string& path, std::vector<std::string>& warnings);
+
+}  // namespace tessera

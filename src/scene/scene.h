@@ -1,0 +1,63 @@
+#pragma once
+/// \file scene.h
+/// A loaded scene: geometry, materials, lights, camera and the render defaults the file asks for.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "accel/accel.h"
+#include "geometry/shapes.h"
+#include "materials/material.h"
+#include "scene/camera.h"
+#include "scene/lights.h"
+
+namespace tessera {
+
+/// Render defaults a scene may carry (glTF extension TESSERA_render); the command line overrides them.
+struct RenderSettings {
+    int width = 512;
+    int height = 512;
+    int spp = 16;
+    int maxDepth = -1;  ///< maximum number of bounces; −1 = unlimited (Russian roulette ends paths)
+    uint64_t seed = 0;
+    std::string integrator = "ptnee";
+};
+
+/// The local geometry at a ray hit, in world space.
+struct SurfaceInteraction {
+    Vec3f p{0.f};
+    Vec3f ng{0.f};  ///< unit geometric normal (triangle winding / sphere outward)
+    Vec3f ns{0.f};  ///< unit shading normal, in the same hemisphere as ng
+    uint32_t materialId = 0;
+    uint32_t lightIndex = kInvalidId;
+};
+
+class Scene {
+public:
+    Scene() = default;
+    /// Moving a scene re-binds its light set to the moved geometry (the lights point into it).
+    Scene(Scene&& other) noexcept;
+    Scene& operator=(Scene&& other) noexcept;
+    Scene(const Scene&) = delete;
+    Scene& operator=(const Scene&) = delete;
+
+    SceneGeometry geometry;
+    std::vector<Material> materials;
+    std::optional<CameraDesc> camera;
+    RenderSettings settings;
+    std::string sourcePath;  ///< the file it was loaded from (for messages and metadata)
+
+    /// Builds the light set; call once after geometry and materials are final.
+    void finalize();
+    const LightSet& lights() const { return lights_; }
+
+    /// Fills the surface interaction of `hit` for `ray`. The point is recomputed from the primitive
+    /// (barycentric interpolation / reprojection onto the sphere), which is far more accurate than
+    /// o + t·d and is what makes ray spawning with a few ulps of offset safe.
+    SurfaceInteraction interaction(const Ray& ray, const Hit& hit) const;
+
+private:
+    LightSet lights_;
+};
+
+}  // namespace tessera
