@@ -52,14 +52,18 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
         Frame frame(si.ns);
         Vec3f woL = frame.toLocal(wo);
         float woNg = glm::dot(wo, si.ng);
+        // Light sampling and MIS densities are evaluated from the point offset off the surface on
+        // wo's side (where reflected rays start), not from the surface point itself: for a point on
+        // an emitting sphere, "inside or outside the sphere" must not be decided by rounding.
+        Vec3f pRef = offsetRayOrigin(si.p, woNg >= 0.f ? si.ng : -si.ng);
 
         // Next-event estimation: one light sample, weighted against BSDF sampling.
         if (!isDeltaMaterial(mat) && !lights.empty()) {
             LightSample ls;
             float uPick = sampler.get1D();
             Vec2f uLight = sampler.get2D();
-            if (lights.sample(si.p, uPick, uLight, ls) && !isBlack(ls.Le)) {
-                Vec3f toLight = ls.p - si.p;
+            if (lights.sample(pRef, uPick, uLight, ls) && !isBlack(ls.Le)) {
+                Vec3f toLight = ls.p - pRef;
                 float dist = glm::length(toLight);
                 Vec3f wi = toLight / dist;
                 Vec3f wiL = frame.toLocal(wi);
@@ -87,7 +91,6 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
         etaScale *= bs.eta * bs.eta;
         deltaBounce = bs.isDelta;
         prevPdfW = bs.pdfW;
-        prevP = si.p;
         if (isBlack(beta)) break;
 
         // Russian roulette (Arvo & Kirk 1990) after two bounces; etaScale keeps paths inside glass
@@ -99,6 +102,7 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
             beta /= 1.f - q;
         }
         ray = spawnRay(si.p, si.ng, wi);
+        prevP = ray.o;
     }
     return L;
 }

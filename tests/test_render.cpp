@@ -1,0 +1,127 @@
+// Whole-renderer tests: the white furnace (an analytic answer) and thread-count determinism.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "integrators/integrator.h"
+#include "render/renderer.h"
+#include "scene/gltf_loader.h"
+#include "test_helpers.h"
+
+using namespace tessera;
+
+namespace {
+
+struct ImageStats {
+    double mean[3], standardError[3];
+};
+
+/// Mean over pixels and its standard error (pixels are independent estimates of the same value).
+ImageStats pixelStatistics(const Film& film) {
+    ImageStats s{};
+    double n = double(film.width()) * film.height();
+    for (int c = 0; c < 3; ++c) {
+        double sum = 0, sumSq = 0;
+        for (int y = 0; y < film.height(); ++y)
+            for (int x = 0; x < film.width(); ++x) {
+                double v = film.pixel(x, y)[c];
+                sum += v;
+                sumSq += v * v;
+            }
+        s.mean[c] = sum / n;
+        s.standardError[c] = std::sqrt(std::max(0.0, (sumSq / n - s.mean[c] * s.mean[c]) / (n - 1)));
+    }
+    return s;
+}
+
+/// A closed sphere seen from its centre: every surface has albedo a and emits Le (both faces), so
+/// the radiance everywhere is Le (1 + a + a² + …) = Le / (1 − a).
+Scene furnaceScene(Rgb albedo, Rgb Le, bool asMesh) {
+    Scene scene;
+    Material m;
+    m.albedo = albedo;
+    m.emission = Le;
+    m.doubleSided = true;
+    scene.materials.push_back(m);
+    if (asMesh) scene.geometry.meshes.push_back(test::makeUvSphereMesh(Vec3f(0.1f, -0.2f, 0.05f), 1.f, 32, 64, 0));
+    else scene.geometry.spheres.push_back(Sphere{"furnace", Vec3f(0.1f, -0.2f, 0.05f), 1.f, 0});
+    scene.finalize();
+    scene.camera = CameraDesc{};
+    scene.camera->yfov = 1.2f;
+    return scene;
+}
+
+void expectFurnace(const Scene& scene, Rgb albedo, Rgb Le, int spp) {
+    auto accel = createAccel("embree", scene.geometry);
+    auto integrator = createIntegrator("ptnee");
+    Camera camera(*scene.camera, 48, 48);
+    RenderContext ctx{scene, *accel, camera, -1};
+    Film film(48, 48);
+    RenderOptions opt;
+    opt.spp = spp;
+    opt.seed = 1234;
+    RenderStats stats = renderImage(ctx, *integrator, film, opt);
+    EXPECT_EQ(stats.nonFiniteDropped, 0u);
+    ImageStats s = pixelStatistics(film);
+    for (int c = 0; c < 3; ++c) {
+        double expected = Le[c] / (1.0 - albedo[c]);
+        double err = std::abs(s.mean[c] - expected);
+        EXPECT_LT(err, 3.0 * s.standardError[c]) << "channel " << c << " mean " << s.mean[c] << " expected " << expected
+                                                 << " se " << s.standardError[c];
+        EXPECT_LT(err, 0.005 * expected) << "channel " << c << " mean " << s.mean[c] << " expected " << expected;
+    }
+}
+
+}  // namespace
+
+TEST(Furnace, AnalyticSphereGivesLeOverOneMinusAlbedo) {
+    Rgb albedo(0.5f, 0.3f, 0.8f), Le(1.f, 2.f, 0.5f);
+    expectFurnace(furnaceScene(albedo, Le, false), albedo, Le, 96);
+}
+
+TEST(Furnace, TriangleMeshSphereGivesLeOverOneMinusAlbedo) {
+    Rgb albedo(0.6f), Le(1.f);
+    expectFurnace(furnaceScene(albedo, Le, true), albedo, Le, 96);
+}
+
+TEST(Determinism, OneAndTwoThreadsGiveTheSameBits) {
+    std::vector<std::string> warnings;
+    Scene scene = loadGltfScene(test::sourcePath("scenes/cornell-box/cornell-box.gltf"), warnings);
+    auto accel = createAccel("embree", scene.geometry);
+    auto integrator = createIntegrator("ptnee");
+    Camera camera(*scene.camera, 80, 60);
+    RenderContext ctx{scene, *accel, camera, -1};
+    std::vector<float> images[2];
+    for (int threads : {1, 2}) {
+        Film film(80, 60);
+        RenderOptions opt;
+        opt.spp = 8;
+        opt.threads = threads;
+        opt.tileSize = 16;
+        opt.seed = 7;
+        renderImage(ctx, *integrator, film, opt);
+        images[threads - 1] = film.rgba();
+    }
+    ASSERT_EQ(images[0].size(), images[1].size());
+    EXPECT_EQ(std::memcmp(images[0].data(), images[1].data(), images[0].size() * sizeof(float)), 0);
+    double sum = 0;
+    for (float v : images[0]) sum += v;
+    EXPECT_GT(sum, 0.0);
+}
+
+TEST(Render, CancelledRenderStopsAndKeepsWhatItHas) {
+    std::vector<std::string> warnings;
+    Scene scene = loadGltfScene(test::sourcePath("scenes/cornell-box/cornell-box.gltf"), warnings);
+    auto accel = createAccel("embree", scene.geometry);
+    auto integrator = createIntegrator("ptnee");
+    Camera camera(*scene.camera, 64, 64);
+    RenderContext ctx{scene, *accel, camera, -1};
+    Film film(64, 64);
+    std::atomic<bool> cancel{true};
+    RenderOptions opt;
+    opt.spp = 4;
+    opt.cancel = &cancel;
+    RenderStats stats = renderImage(ctx, *integrator, film, opt);
+    EXPECT_TRUE(stats.interrupted);
+    EXPECT_EQ(stats.sppCompleted, 0u);
+}
