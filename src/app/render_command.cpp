@@ -28,7 +28,8 @@ struct RenderArgs {
     int spp = 0, threads = 0, maxDepth = -2;
     double timeLimit = 0.0, fovDeg = 0.0;
     int64_t seed = -1;
-    bool quiet = false, json = false, noPng = false;
+    bool quiet = false, json = false, noPng = false, allowExternalFiles = false;
+    double maxMemoryGiB = 16.0;
 };
 
 /// FNV-1a 64 of the scene file: identifies the exact input in the output's metadata.
@@ -79,7 +80,10 @@ std::string stem(const std::string& path) { return std::filesystem::path(path).s
 
 int runRender(const RenderArgs& a) {
     std::vector<std::string> warnings;
-    Scene scene = loadGltfScene(a.scene, warnings);
+    SceneLoadOptions loadOptions;
+    loadOptions.allowExternalFiles = a.allowExternalFiles;
+    loadOptions.maxFileBytes = uint64_t(a.maxMemoryGiB * double(1ull << 30));
+    Scene scene = loadGltfScene(a.scene, warnings, loadOptions);
     for (const std::string& w : warnings) printWarning(w);
 
     RenderSettings s = scene.settings;
@@ -110,6 +114,14 @@ int runRender(const RenderArgs& a) {
     if (!scene.camera)
         throw SceneError(a.scene, "cameras", "the scene has no camera; give one with --look-at EX,EY,EZ,TX,TY,TZ [--fov DEG]");
 
+    // The film keeps sum, sum of squares and splats in double per channel plus a count: refuse a
+    // resolution whose film alone would exceed the memory limit instead of dying in the allocator.
+    double filmBytes = double(s.width) * double(s.height) * (9.0 * sizeof(double) + sizeof(uint32_t) + 4 * sizeof(float));
+    if (filmBytes > a.maxMemoryGiB * double(1ull << 30))
+        throw InputError(a.scene + ": " + (a.resolution.empty() ? "extensions.TESSERA_render: " : "--resolution: ") +
+                         "resolution " + std::to_string(s.width) + "x" + std::to_string(s.height) + " needs " +
+                         std::to_string(int(filmBytes / double(1ull << 30) + 0.5)) + " GiB of film memory, over the limit of " +
+                         std::to_string(int(a.maxMemoryGiB)) + " GiB (--max-memory)");
     std::string exrPath = a.output.empty() ? "out/" + stem(a.scene) + ".exr" : a.output;
     std::string pngPath = a.noPng ? "" : (a.png.empty() ? std::filesystem::path(exrPath).replace_extension(".png").string() : a.png);
     // Validate the display transform before spending time on the render.
@@ -222,6 +234,10 @@ Runner addRenderCommand(CLI::App& app) {
     cmd->add_option("--fov", a->fovDeg, "vertical field of view in degrees (with or without --look-at)")->check(CLI::Range(0.001, 179.0));
     cmd->add_option("--display", a->display, "OCIO display for the PNG (default: sRGB)");
     cmd->add_option("--view", a->view, "OCIO view for the PNG: Standard, \"ACES 1.0 SDR-video\", Raw (default: Standard)");
+    cmd->add_flag("--allow-external-files", a->allowExternalFiles,
+                  "let the scene reference files outside its own folder (off: '..', absolute paths and symlinks out are refused)");
+    cmd->add_option("--max-memory", a->maxMemoryGiB, "memory limit in GiB for input files and the film (default: 16)")
+        ->check(CLI::Range(0.001, 1e6));
     cmd->add_flag("--quiet", a->quiet, "no progress output");
     cmd->add_flag("--json", a->json, "print one JSON object with the run's figures on stdout when done");
     cmd->footer("Ctrl-C stops at the next tile and still writes what was rendered (exit code 130); press it\n"

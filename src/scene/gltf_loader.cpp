@@ -3,6 +3,7 @@
 #include <tiny_gltf.h>
 
 #include <filesystem>
+#include <fstream>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <set>
@@ -20,11 +21,74 @@ bool skipImage(gl::Image*, const int, std::string*, std::string*, int, int, cons
     return true;
 }
 
+/// File access for tinygltf, confined to the scene's folder. Replaces tinygltf's defaults, whose
+/// path expansion runs wordexp(3) on URIs taken from the file (shell-style expansion of untrusted
+/// text) and which read any path a URI names.
+struct FileAccess {
+    std::filesystem::path root;  ///< canonical folder of the scene file
+    SceneLoadOptions options;
+    std::string violation;       ///< first refused path, reported as the error's cause
+
+    bool allowed(const std::string& path) {
+        std::error_code ec;
+        std::filesystem::path canonical = std::filesystem::weakly_canonical(path, ec);
+        if (ec) return false;
+        if (options.allowExternalFiles) return true;
+        auto rel = canonical.lexically_relative(root);
+        bool inside = !rel.empty() && rel.native().rfind("..", 0) != 0 && !rel.is_absolute();
+        if (!inside && violation.empty())
+            violation = "'" + path + "' lies outside the scene's folder (pass --allow-external-files to permit it)";
+        return inside;
+    }
+};
+
+bool fsFileExists(const std::string& path, void*) {
+    // Existence is not access: the read below refuses files outside the folder and says why.
+    std::error_code ec;
+    return std::filesystem::is_regular_file(path, ec);
+}
+
+std::string fsExpandFilePath(const std::string& path, void*) { return path; }
+
+bool fsReadWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+    auto* fa = static_cast<FileAccess*>(user);
+    if (!fa->allowed(path)) {
+        if (err) *err += "refused to read " + path + "\n";
+        return false;
+    }
+    std::error_code ec;
+    uint64_t size = std::filesystem::file_size(path, ec);
+    if (ec) {
+        if (err) *err += "cannot read " + path + "\n";
+        return false;
+    }
+    if (size > fa->options.maxFileBytes) {
+        if (fa->violation.empty())
+            fa->violation = "'" + path + "' is " + std::to_string(size) + " bytes, over the limit of " +
+                            std::to_string(fa->options.maxFileBytes);
+        if (err) *err += "file too large: " + path + "\n";
+        return false;
+    }
+    std::ifstream in(path, std::ios::binary);
+    out->resize(size_t(size));
+    if (size > 0 && !in.read(reinterpret_cast<char*>(out->data()), std::streamsize(size))) {
+        if (err) *err += "cannot read " + path + "\n";
+        return false;
+    }
+    return true;
+}
+
+bool fsWriteWholeFile(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+    if (err) *err += "writing is not allowed while loading\n";
+    return false;
+}
+
 std::string idx(const char* array, size_t i) { return std::string(array) + "[" + std::to_string(i) + "]"; }
 
 class Loader {
 public:
-    Loader(std::string path, std::vector<std::string>& warnings) : path_(std::move(path)), warnings_(warnings) {}
+    Loader(std::string path, std::vector<std::string>& warnings, const SceneLoadOptions& options)
+        : path_(std::move(path)), warnings_(warnings), options_(options) {}
 
     Scene load() {
         readModel();
@@ -50,12 +114,21 @@ private:
         if (!std::filesystem::is_regular_file(path_, ec)) fail("", "no such file");
         gl::TinyGLTF loader;
         loader.SetImageLoader(skipImage, nullptr);
+        FileAccess access;
+        access.root = std::filesystem::weakly_canonical(std::filesystem::absolute(path_), ec).parent_path();
+        access.options = options_;
+        loader.SetFsCallbacks(gl::FsCallbacks{fsFileExists, fsExpandFilePath, fsReadWholeFile, fsWriteWholeFile, &access});
+        // The scene file itself is always readable, wherever it is; only what it references is confined.
+        uint64_t sceneBytes = std::filesystem::file_size(path_, ec);
+        if (!ec && sceneBytes > options_.maxFileBytes)
+            fail("", "file is " + std::to_string(sceneBytes) + " bytes, over the limit of " + std::to_string(options_.maxFileBytes));
         std::string err, warn;
         std::string ext = std::filesystem::path(path_).extension().string();
         for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
         bool ok = ext == ".glb" ? loader.LoadBinaryFromFile(&model_, &err, &warn, path_)
                                 : loader.LoadASCIIFromFile(&model_, &err, &warn, path_);
         if (!ok || !err.empty()) {
+            if (!access.violation.empty()) fail("buffers", access.violation);
             std::string msg = err.empty() ? "cannot parse the file" : err;
             while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
             for (char& c : msg)
@@ -398,8 +471,10 @@ private:
                 }
                 mesh.triangles.push_back(t);
             }
-            if (scene_.materials[mesh.materialId].isEmissive() && mesh.triangles.empty() && !tris.empty())
-                fail(el, "emitter has zero area");
+            if (mesh.triangles.empty() && !tris.empty()) {
+                if (scene_.materials[mesh.materialId].isEmissive()) fail(el, "emitter has zero area");
+                fail(el, "all " + std::to_string(tris.size()) + " triangle(s) are degenerate or have non-finite vertices");
+            }
             scene_.geometry.meshes.push_back(std::move(mesh));
         }
     }
@@ -420,6 +495,7 @@ private:
 
     std::string path_;
     std::vector<std::string>& warnings_;
+    SceneLoadOptions options_;
     gl::Model model_;
     Scene scene_;
     uint32_t defaultMaterial_ = 0;
@@ -435,7 +511,11 @@ std::vector<std::string> supportedGltfExtensions() {
 }
 
 Scene loadGltfScene(const std::string& path, std::vector<std::string>& warnings) {
-    return Loader(path, warnings).load();
+    return Loader(path, warnings, SceneLoadOptions{}).load();
+}
+
+Scene loadGltfScene(const std::string& path, std::vector<std::string>& warnings, const SceneLoadOptions& options) {
+    return Loader(path, warnings, options).load();
 }
 
 }  // namespace tessera

@@ -16,11 +16,21 @@
 
 namespace tessera {
 
+/// Limits that keep a file from a stranger from reaching outside its folder or exhausting memory.
+struct SceneLoadOptions {
+    /// Allow buffer/image URIs that resolve outside the scene's folder (`..`, absolute paths,
+    /// symlinks pointing out). Off by default: a scene file must not read arbitrary files.
+    bool allowExternalFiles = false;
+    /// Largest file (scene or buffer) read, in bytes. data: URIs are bounded by the scene file's size.
+    uint64_t maxFileBytes = uint64_t(4) << 30;
+};
+
 /// The extensions this loader understands; any other entry of extensionsRequired is an error.
 std::vector<std::string> supportedGltfExtensions();
 
 /// Loads `path`. Non-fatal problems (dropped degenerate triangles, ignored point primitives) are
 /// appended to `warnings`, one line per kind of problem.
 Scene loadGltfScene(const std::string& path, std::vector<std::string>& warnings);
+Scene loadGltfScene(const std::string& path, std::vector<std::string>& warnings, const SceneLoadOptions& options);
 
 }  // namespace tessera
