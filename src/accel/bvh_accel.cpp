@@ -34,6 +34,12 @@ inline float twoUlpsLarger(float x) {
     return x;
 }
 
+/// A t bound raised by 4 ulps. A computed box entry distance may exceed the exact one by about
+/// 1.5 ulps (one subtraction, one product), so boxes are culled against the padded closest hit:
+/// a primitive lying on a box face is then never culled by rounding (Ize 2013, Section 3 bounds
+/// the far side; this covers the near side).
+inline float padUp(float t) { return t + std::abs(t) * 0x1p-21f; }
+
 struct StackEntry {
     uint32_t ref;
     float tNear;
@@ -71,7 +77,7 @@ struct BoxRay {
         Vf8 tyF = (load8(n.bounds[farY]) - oy) * rdyFar;
         Vf8 tzF = (load8(n.bounds[farZ]) - oz) * rdzFar;
         tNear = maxNanB(txN, maxNanB(tyN, maxNanB(tzN, tMin)));
-        Vf8 tFar = minNanB(txF, minNanB(tyF, minNanB(tzF, splat8(tMax))));
+        Vf8 tFar = minNanB(txF, minNanB(tyF, minNanB(tzF, splat8(padUp(tMax)))));
         return tNear <= tFar;
     }
 };
@@ -192,6 +198,11 @@ BvhAccel::BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, c
             b.extend(mesh.positions[t.y]);
             b.extend(mesh.positions[t.z]);
             if (!finiteBounds(b)) continue;  // a non-finite vertex can never be hit
+            // The watertight test may place a hit a few ulps outside the exact triangle (its shear
+            // rounds); pad the box by as much so a box face through an edge never hides such a hit.
+            Vec3f pad = 0x1p-20f * glm::max(glm::abs(b.lower), glm::abs(b.upper));
+            b.lower -= pad;
+            b.upper += pad;
             prims_.push_back({g, i});
             primBounds.push_back(b);
             centroids.push_back(b.center());
@@ -385,7 +396,7 @@ TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
         do {
             if (sp == 0) goto done;
             --sp;
-        } while (stack[sp].tNear > tMax);
+        } while (stack[sp].tNear > padUp(tMax));
         ref = stack[sp].ref;
     }
 done:
@@ -490,6 +501,18 @@ bool BvhAccel::intersect(const Ray& ray, Hit& hit) const {
 }
 
 bool BvhAccel::occluded(const Ray& ray) const { return useAvx2_ ? occludedAvx2(ray) : occludedImpl<false>(ray); }
+
+uint64_t BvhAccel::structureHash() const {
+    uint64_t h = 0xcbf29ce484222325ULL;
+    auto add = [&](const void* data, size_t bytes) {
+        const auto* p = static_cast<const unsigned char*>(data);
+        for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 0x100000001b3ULL;
+    };
+    add(nodes_.data(), nodes_.size() * sizeof(Node8));
+    add(triangles_.data(), triangles_.size() * sizeof(Triangle4));
+    add(mixedPrims_.data(), mixedPrims_.size() * sizeof(PrimRef));
+    return h;
+}
 
 std::string BvhAccel::checkInvariants() const {
     std::vector<uint8_t> seen(prims_.size(), 0);

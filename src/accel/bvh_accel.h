@@ -28,6 +28,8 @@ public:
     /// inside its parent's box, every primitive inside its leaf's box. Returns "" or the first problem.
     std::string checkInvariants() const;
     size_t nodeCount() const { return nodes_.size(); }
+    /// FNV-1a hash of the nodes and leaf blocks: equal for equal trees (determinism tests).
+    uint64_t structureHash() const;
 
     /// 8-wide node: child boxes as SoA (bounds[axis][lane] lower, bounds[3 + axis][lane] upper; empty
     /// lanes hold an inverted box that no ray enters) and child references (see kLeafBit).
