@@ -7,47 +7,97 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <numeric>
+#include <cstring>
+#include <tuple>
+
+#include "accel/bvh_simd.h"
 
 namespace tessera {
 namespace {
 
-constexpr int kMaxBins = 64;
+using simd::Vf4;
+using simd::Vi4;
 
-float halfArea(const Bounds3f& b) {
-    // Half the surface area: SAH only compares ratios, and empty boxes must count as 0.
-    if (b.empty()) return 0.f;
-    Vec3f d = b.upper - b.lower;
-    return d.x * d.y + d.y * d.z + d.z * d.x;
-}
+constexpr int kMaxBins = 32;
+
+/// One primitive as the builder moves it around: box and centroid in SIMD registers, the primitive
+/// index in the box's unused fourth lane. Partitioning these records (not indices into the caller's
+/// arrays) keeps every pass over a node sequential in memory, as Embree's PrimRef does.
+struct alignas(16) Ref {
+    Vf4 lo, hi, c;
+    uint32_t index() const {
+        uint32_t i;
+        std::memcpy(&i, reinterpret_cast<const char*>(&lo) + 12, 4);
+        return i;
+    }
+};
+
+TESSERA_INLINE Vf4 vmin(Vf4 a, Vf4 b) { return a < b ? a : b; }
+TESSERA_INLINE Vf4 vmax(Vf4 a, Vf4 b) { return a > b ? a : b; }
+
+/// An axis-aligned box in SIMD form (lanes x, y, z; lane 3 ignored).
+struct Box {
+    Vf4 lo = simd::splat4(kInfinity), hi = simd::splat4(-kInfinity);
+    TESSERA_INLINE void extend(Vf4 l, Vf4 h) { lo = vmin(lo, l), hi = vmax(hi, h); }
+    TESSERA_INLINE void extend(const Box& b) { extend(b.lo, b.hi); }
+    bool empty() const { return lo[0] > hi[0] || lo[1] > hi[1] || lo[2] > hi[2]; }
+    /// Half the surface area: SAH only compares ratios, and empty boxes count as 0.
+    float halfArea() const {
+        if (empty()) return 0.f;
+        Vf4 d = hi - lo;
+        return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+    }
+    Bounds3f bounds() const {
+        Bounds3f b;
+        b.lower = Vec3f(lo[0], lo[1], lo[2]);
+        b.upper = Vec3f(hi[0], hi[1], hi[2]);
+        return b;
+    }
+};
 
 /// Per-axis bins of one node: box and count of the primitives whose centroid falls in each bin.
 struct Binning {
-    std::array<std::array<Bounds3f, kMaxBins>, 3> bounds;
-    std::array<std::array<uint32_t, kMaxBins>, 3> counts{};
+    // Plain SIMD arrays (trivially constructible), initialised for the bins in use only: small
+    // nodes are the majority and clearing 3 × kMaxBins boxes each time dominated the build.
+    Vf4 lo[3][kMaxBins], hi[3][kMaxBins];
+    uint32_t counts[3][kMaxBins];
 
+    explicit Binning(int binCount = kMaxBins) {
+        for (int a = 0; a < 3; ++a)
+            for (int i = 0; i < binCount; ++i) lo[a][i] = simd::splat4(kInfinity), hi[a][i] = simd::splat4(-kInfinity), counts[a][i] = 0;
+    }
+    TESSERA_INLINE void add(int axis, int bin, Vf4 l, Vf4 h) {
+        lo[axis][bin] = vmin(lo[axis][bin], l);
+        hi[axis][bin] = vmax(hi[axis][bin], h);
+        ++counts[axis][bin];
+    }
     void merge(const Binning& o, int binCount) {
         for (int a = 0; a < 3; ++a)
             for (int i = 0; i < binCount; ++i) {
-                bounds[a][i].extend(o.bounds[a][i]);
+                lo[a][i] = vmin(lo[a][i], o.lo[a][i]);
+                hi[a][i] = vmax(hi[a][i], o.hi[a][i]);
                 counts[a][i] += o.counts[a][i];
             }
     }
 };
 
-/// Maps a centroid coordinate to its bin: k · (c − min) / extent, clamped (Wald 2007, eq. 1). The
+/// Maps a centroid to its bin on each axis: k · (c − min) / extent, clamped (Wald 2007, eq. 1). The
 /// same function bins and partitions, so a chosen split can never leave a side empty.
 struct BinMapping {
-    Vec3f lower, scale;
+    Vf4 lower, scale;
     int binCount;
-    BinMapping(const Bounds3f& centroidBounds, int bins) : lower(centroidBounds.lower), binCount(bins) {
-        Vec3f extent = centroidBounds.upper - centroidBounds.lower;
-        for (int a = 0; a < 3; ++a)
-            scale[a] = extent[a] > 0.f ? float(bins) * (1.f - 1e-6f) / extent[a] : 0.f;
+    BinMapping(const Box& centroidBox, int bins) : lower(centroidBox.lo), binCount(bins) {
+        Vf4 extent = centroidBox.hi - centroidBox.lo;
+        for (int a = 0; a < 4; ++a) scale[a] = (a < 3 && extent[a] > 0.f) ? float(bins) * (1.f - 1e-6f) / extent[a] : 0.f;
     }
-    int bin(const Vec3f& c, int axis) const {
-        int i = int((c[axis] - lower[axis]) * scale[axis]);
-        return std::clamp(i, 0, binCount - 1);
+    TESSERA_INLINE Vi4 bins(Vf4 c) const {
+        Vi4 i = __builtin_convertvector((c - lower) * scale, Vi4);
+        Vi4 zero{}, top = Vi4{} + (binCount - 1);
+        i = i < zero ? zero : i;
+        return i > top ? top : i;
+    }
+    TESSERA_INLINE int bin(Vf4 c, int axis) const {
+        return std::clamp(int((c[axis] - lower[axis]) * scale[axis]), 0, binCount - 1);
     }
 };
 
@@ -62,12 +112,24 @@ public:
 
     void run() {
         size_t n = primBounds_.size();
-        out_.primIndices.resize(n);
-        std::iota(out_.primIndices.begin(), out_.primIndices.end(), 0u);
         if (n == 0) return;
+        refs_.resize(n);
+        Box bounds, centroids;
+        for (size_t i = 0; i < n; ++i) {
+            const Bounds3f& b = primBounds_[i];
+            const Vec3f& c = centroids_[i];
+            float indexBits;
+            uint32_t idx = uint32_t(i);
+            std::memcpy(&indexBits, &idx, 4);
+            refs_[i] = Ref{Vf4{b.lower.x, b.lower.y, b.lower.z, indexBits}, Vf4{b.upper.x, b.upper.y, b.upper.z, 0.f},
+                           Vf4{c.x, c.y, c.z, 0.f}};
+            bounds.extend(refs_[i].lo, refs_[i].hi);
+            centroids.extend(refs_[i].c, refs_[i].c);
+        }
         out_.nodes.resize(2 * n - 1);
-        auto [bounds, centroidBounds] = rangeBounds(0, uint32_t(n));
-        build(0, 0, uint32_t(n), bounds, centroidBounds, 0);
+        build(0, 0, uint32_t(n), bounds, centroids, 0);
+        out_.primIndices.resize(n);
+        for (size_t i = 0; i < n; ++i) out_.primIndices[i] = refs_[i].index();
         out_.maxDepth = maxDepth_.load();
     }
 
@@ -76,58 +138,36 @@ private:
     std::span<const Vec3f> centroids_;
     BvhConfig config_;
     BinaryBvh& out_;
+    std::vector<Ref> refs_;
     std::atomic<uint32_t> maxDepth_{0};
 
     float blocks(uint32_t n) const { return float((n + uint32_t(config_.sahBlockSize) - 1) / uint32_t(config_.sahBlockSize)); }
 
-    std::pair<Bounds3f, Bounds3f> rangeBounds(uint32_t begin, uint32_t end) const {
-        using Pair = std::pair<Bounds3f, Bounds3f>;
-        const uint32_t* idx = out_.primIndices.data();
-        // Min/max are exact, so any reduction order gives the same boxes.
-        return tbb::parallel_reduce(
-            tbb::blocked_range<uint32_t>(begin, end, 16384), Pair{},
-            [&](const tbb::blocked_range<uint32_t>& r, Pair acc) {
-                for (uint32_t i = r.begin(); i != r.end(); ++i) {
-                    acc.first.extend(primBounds_[idx[i]]);
-                    acc.second.extend(centroids_[idx[i]]);
-                }
-                return acc;
-            },
-            [](Pair a, const Pair& b) {
-                a.first.extend(b.first);
-                a.second.extend(b.second);
-                return a;
-            });
-    }
-
     void binRange(uint32_t begin, uint32_t end, const BinMapping& map, Binning& bins) const {
-        const uint32_t* idx = out_.primIndices.data();
         for (uint32_t i = begin; i < end; ++i) {
-            uint32_t p = idx[i];
-            const Vec3f& c = centroids_[p];
-            for (int a = 0; a < 3; ++a) {
-                int b = map.bin(c, a);
-                bins.bounds[a][b].extend(primBounds_[p]);
-                ++bins.counts[a][b];
-            }
+            const Ref& r = refs_[i];
+            Vi4 b = map.bins(r.c);
+            bins.add(0, b[0], r.lo, r.hi);
+            bins.add(1, b[1], r.lo, r.hi);
+            bins.add(2, b[2], r.lo, r.hi);
         }
     }
 
     Binning binPrimitives(uint32_t begin, uint32_t end, const BinMapping& map) const {
         if (end - begin < uint32_t(4 * config_.parallelThreshold)) {
-            Binning bins;
+            Binning bins(map.binCount);
             binRange(begin, end, map, bins);
             return bins;
         }
         // Bin boxes are min/max and counts integers: the merged result is exact in any order.
         return tbb::parallel_reduce(
-            tbb::blocked_range<uint32_t>(begin, end, 8192), Binning{},
+            tbb::blocked_range<uint32_t>(begin, end, 8192), Binning(map.binCount),
             [&](const tbb::blocked_range<uint32_t>& r, Binning acc) {
                 binRange(r.begin(), r.end(), map, acc);
                 return acc;
             },
             [&](Binning a, const Binning& b) {
-                a.merge(b, config_.binCount);
+                a.merge(b, map.binCount);
                 return a;
             });
     }
@@ -135,115 +175,128 @@ private:
     struct Split {
         int axis = -1, bin = 0;
         float cost = kInfinity;
+        Box left, right;
     };
 
     /// Sweeps the bins of each axis from both ends and returns the cheapest plane (in units of
-    /// half-area × blocks; the node's constant terms are added by the caller).
-    Split findSplit(const Binning& bins) const {
+    /// half-area × blocks; the node's constant terms are added by the caller) with both child boxes.
+    Split findSplit(const Binning& bins, int k) const {
         Split best;
-        int k = config_.binCount;
         for (int a = 0; a < 3; ++a) {
             std::array<float, kMaxBins> rightCost{};
-            Bounds3f acc;
+            std::array<Box, kMaxBins> rightBox;
+            Box acc;
             uint32_t count = 0;
             for (int i = k - 1; i > 0; --i) {
-                acc.extend(bins.bounds[a][i]);
+                acc.extend(bins.lo[a][i], bins.hi[a][i]);
                 count += bins.counts[a][i];
-                rightCost[i] = halfArea(acc) * blocks(count);
+                rightCost[i] = acc.halfArea() * blocks(count);
+                rightBox[i] = acc;
             }
-            acc = Bounds3f();
+            acc = Box();
             count = 0;
             uint32_t total = 0;
             for (int i = 0; i < k; ++i) total += bins.counts[a][i];
             for (int i = 1; i < k; ++i) {
-                acc.extend(bins.bounds[a][i - 1]);
+                acc.extend(bins.lo[a][i - 1], bins.hi[a][i - 1]);
                 count += bins.counts[a][i - 1];
                 if (count == 0 || count == total) continue;
-                float cost = halfArea(acc) * blocks(count) + rightCost[i];
-                if (cost < best.cost) best = {a, i, cost};  // strict: lowest axis, then bin, wins ties
+                float cost = acc.halfArea() * blocks(count) + rightCost[i];
+                if (cost < best.cost) {  // strict: lowest axis, then bin, wins ties
+                    best.axis = a, best.bin = i, best.cost = cost;
+                    best.left = acc, best.right = rightBox[i];
+                }
             }
         }
         return best;
     }
 
-    void makeLeaf(uint32_t slot, uint32_t begin, uint32_t end, const Bounds3f& bounds, uint32_t depth) {
+    void makeLeaf(uint32_t slot, uint32_t begin, uint32_t end, const Box& bounds, uint32_t depth) {
         BvhBuildNode& node = out_.nodes[slot];
-        node.bounds = bounds;
+        node.bounds = bounds.bounds();
         node.count = end - begin;
         node.left = begin;
         uint32_t seen = maxDepth_.load(std::memory_order_relaxed);
         while (depth > seen && !maxDepth_.compare_exchange_weak(seen, depth)) {}
     }
 
-    void build(uint32_t slot, uint32_t begin, uint32_t end, const Bounds3f& bounds, const Bounds3f& centroidBounds,
-               uint32_t depth) {
+    /// Box and centroid box of refs_[begin, end).
+    std::pair<Box, Box> rangeBoxes(uint32_t begin, uint32_t end) const {
+        std::pair<Box, Box> r;
+        for (uint32_t i = begin; i < end; ++i) {
+            r.first.extend(refs_[i].lo, refs_[i].hi);
+            r.second.extend(refs_[i].c, refs_[i].c);
+        }
+        return r;
+    }
+
+    void build(uint32_t slot, uint32_t begin, uint32_t end, const Box& bounds, const Box& centroidBox, uint32_t depth) {
         uint32_t n = end - begin;
         if (n == 1) return makeLeaf(slot, begin, end, bounds, depth);
 
-        uint32_t* idx = out_.primIndices.data();
+        Ref* refs = refs_.data();
         uint32_t mid = begin;
         Split split;
-        BinMapping map(centroidBounds, config_.binCount);
-        bool degenerateCentroids = centroidBounds.upper == centroidBounds.lower;
+        // Fewer bins than primitives cannot find more planes: small nodes use about one per primitive.
+        int binCount = std::min(config_.binCount, std::max(4, int(n)));
+        BinMapping map(centroidBox, binCount);
+        bool degenerateCentroids = !(centroidBox.hi[0] > centroidBox.lo[0] || centroidBox.hi[1] > centroidBox.lo[1] ||
+                                     centroidBox.hi[2] > centroidBox.lo[2]);
         if (!degenerateCentroids && int(depth) < config_.maxSahDepth) {
-            split = findSplit(binPrimitives(begin, end, map));
-            float area = halfArea(bounds);
+            split = findSplit(binPrimitives(begin, end, map), binCount);
+            float area = bounds.halfArea();
             float leafCost = config_.intersectionCost * blocks(n);
             float splitCost = area > 0.f ? config_.traversalCost + config_.intersectionCost * split.cost / area : kInfinity;
-            if (n <= uint32_t(config_.maxLeafSize) && leafCost <= splitCost)
-                return makeLeaf(slot, begin, end, bounds, depth);
+            if (n <= uint32_t(config_.maxLeafSize) && leafCost <= splitCost) return makeLeaf(slot, begin, end, bounds, depth);
         } else if (n <= uint32_t(config_.maxLeafSize)) {
             return makeLeaf(slot, begin, end, bounds, depth);
         }
 
+        Box leftBox, rightBox, leftCentroids, rightCentroids;
         if (split.axis >= 0) {
+            // Partition in place by bin (Hoare), collecting each side's centroid box on the way;
+            // the children's boxes are the unions of their bins, already known from the sweep.
             int axis = split.axis, bin = split.bin;
-            mid = uint32_t(std::partition(idx + begin, idx + end, [&](uint32_t p) { return map.bin(centroids_[p], axis) < bin; }) - idx);
+            uint32_t i = begin, j = end;
+            while (true) {
+                while (i < j && map.bin(refs[i].c, axis) < bin) leftCentroids.extend(refs[i].c, refs[i].c), ++i;
+                while (i < j && map.bin(refs[j - 1].c, axis) >= bin) --j, rightCentroids.extend(refs[j].c, refs[j].c);
+                if (i >= j) break;
+                std::swap(refs[i], refs[j - 1]);
+            }
+            mid = i;
+            leftBox = split.left;
+            rightBox = split.right;
         } else {
             // No SAH split (identical centroids or too deep): object median along the widest
             // centroid axis; ties broken by primitive index so the order is fully determined.
             mid = begin + n / 2;
             if (!degenerateCentroids) {
-                Vec3f e = centroidBounds.upper - centroidBounds.lower;
-                int axis = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
-                std::nth_element(idx + begin, idx + mid, idx + end, [&](uint32_t a, uint32_t b) {
-                    float ca = centroids_[a][axis], cb = centroids_[b][axis];
-                    return ca < cb || (ca == cb && a < b);
+                Vf4 e = centroidBox.hi - centroidBox.lo;
+                int axis = e[0] >= e[1] && e[0] >= e[2] ? 0 : (e[1] >= e[2] ? 1 : 2);
+                std::nth_element(refs + begin, refs + mid, refs + end, [&](const Ref& a, const Ref& b) {
+                    float ca = a.c[axis], cb = b.c[axis];
+                    return ca < cb || (ca == cb && a.index() < b.index());
                 });
             }
+            std::tie(leftBox, leftCentroids) = rangeBoxes(begin, mid);
+            std::tie(rightBox, rightCentroids) = rangeBoxes(mid, end);
         }
 
         uint32_t leftSlot = slot + 1, rightSlot = slot + 2 * (mid - begin);
         BvhBuildNode& node = out_.nodes[slot];
-        node.bounds = bounds;
+        node.bounds = bounds.bounds();
         node.count = 0;
         node.left = leftSlot;
         node.right = rightSlot;
 
-        auto buildLeft = [&] {
-            auto [b, c] = childBounds(begin, mid);
-            build(leftSlot, begin, mid, b, c, depth + 1);
-        };
-        auto buildRight = [&] {
-            auto [b, c] = childBounds(mid, end);
-            build(rightSlot, mid, end, b, c, depth + 1);
-        };
+        auto buildLeft = [&] { build(leftSlot, begin, mid, leftBox, leftCentroids, depth + 1); };
+        auto buildRight = [&] { build(rightSlot, mid, end, rightBox, rightCentroids, depth + 1); };
         if (n >= uint32_t(config_.parallelThreshold)) tbb::parallel_invoke(buildLeft, buildRight);
         else {
             buildLeft();
             buildRight();
         }
-    }
-
-    std::pair<Bounds3f, Bounds3f> childBounds(uint32_t begin, uint32_t end) const {
-        if (end - begin >= uint32_t(4 * config_.parallelThreshold)) return rangeBounds(begin, end);
-        std::pair<Bounds3f, Bounds3f> r;
-        const uint32_t* idx = out_.primIndices.data();
-        for (uint32_t i = begin; i < end; ++i) {
-            r.first.extend(primBounds_[idx[i]]);
-            r.second.extend(centroids_[idx[i]]);
-        }
-        return r;
     }
 };
 
