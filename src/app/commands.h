@@ -11,6 +11,8 @@ using Runner = std::function<int()>;
 
 Runner addRenderCommand(CLI::App& app);
 Runner addCompareCommand(CLI::App& app);
+Runner addValidateAccelCommand(CLI::App& app);
+Runner addBenchAccelCommand(CLI::App& app);
 
 /// Prints "tessera: error: MESSAGE" on one line to stderr.
 void printError(const std::string& message);

@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
     std::vector<std::pair<CLI::App*, app::Runner>> commands;
     app::Runner render = app::addRenderCommand(app);
     app::Runner compare = app::addCompareCommand(app);
+    app::Runner validateAccel = app::addValidateAccelCommand(app);
+    app::Runner benchAccel = app::addBenchAccelCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -27,6 +29,8 @@ int main(int argc, char** argv) {
     try {
         if (app.got_subcommand("render")) return render();
         if (app.got_subcommand("compare")) return compare();
+        if (app.got_subcommand("validate-accel")) return validateAccel();
+        if (app.got_subcommand("bench-accel")) return benchAccel();
     } catch (const InputError& e) {
         app::printError(e.what());
         return 2;

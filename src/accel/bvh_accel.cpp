@@ -1,0 +1,581 @@
+#include "accel/bvh_accel.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "accel/bvh_simd.h"
+#include "geometry/intersect.h"
+
+namespace tessera {
+
+using namespace simd;
+
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+/// Traversal stack size: the builder bounds the binary depth (maxSahDepth + log2 N ≤ 80), each BVH8
+/// level pushes at most 7 entries.
+constexpr int kStackSize = 1024;
+
+/// |x| enlarged by two ulps (x finite or ±inf; inf stays inf). Bit arithmetic instead of two
+/// std::nextafter calls, which cost more than the whole box setup of a ray.
+inline float twoUlpsLarger(float x) {
+    uint32_t bits;
+    std::memcpy(&bits, &x, 4);
+    if ((bits & 0x7fffffffu) >= 0x7f7ffffeu) return std::copysign(kInfinity, x);
+    bits += 2;  // the magnitude is in the low 31 bits: +2 moves two floats away from zero
+    std::memcpy(&x, &bits, 4);
+    return x;
+}
+
+/// A t bound raised by 4 ulps. A computed box entry distance may exceed the exact one by about
+/// 1.5 ulps (one subtraction, one product), so boxes are culled against the padded closest hit:
+/// a primitive lying on a box face is then never culled by rounding (Ize 2013, Section 3 bounds
+/// the far side; this covers the near side).
+inline float padUp(float t) { return t + std::abs(t) * 0x1p-21f; }
+
+struct StackEntry {
+    uint32_t ref;
+    float tNear;
+};
+
+/// Per-ray constants of the box test (Ize 2013, "Robust BVH Ray Traversal", JCGT 2(2), Section 3):
+/// tNear uses 1/d rounded normally and tFar uses 1/d enlarged by 2 ulps, which makes the slab test
+/// conservative despite rounding. Octant from the sign of 1/d, so −0.0 picks the far side correctly.
+struct BoxRay {
+    Vf8 ox, oy, oz, rdxNear, rdyNear, rdzNear, rdxFar, rdyFar, rdzFar, tMin;
+    int nearX, nearY, nearZ, farX, farY, farZ;  ///< row offsets into Node8::bounds
+
+    explicit BoxRay(const Ray& ray) {
+        Vec3f rd, rdFar;
+        for (int a = 0; a < 3; ++a) {
+            rd[a] = 1.f / ray.d[a];  // ±inf for ±0.0: the NaN-aware min/max handle 0 · inf
+            rdFar[a] = twoUlpsLarger(rd[a]);
+        }
+        ox = splat8(ray.o.x), oy = splat8(ray.o.y), oz = splat8(ray.o.z);
+        rdxNear = splat8(rd.x), rdyNear = splat8(rd.y), rdzNear = splat8(rd.z);
+        rdxFar = splat8(rdFar.x), rdyFar = splat8(rdFar.y), rdzFar = splat8(rdFar.z);
+        tMin = splat8(ray.tMin);
+        nearX = std::signbit(rd.x) ? 3 : 0;
+        nearY = std::signbit(rd.y) ? 4 : 1;
+        nearZ = std::signbit(rd.z) ? 5 : 2;
+        farX = 3 - nearX, farY = 5 - nearY, farZ = 7 - nearZ;
+    }
+
+    /// Entry distances of the eight children and the mask of those the ray enters before tMax.
+    TESSERA_INLINE Vi8 test(const BvhAccel::Node8& n, float tMax, Vf8& tNear) const {
+        Vf8 txN = (load8(n.bounds[nearX]) - ox) * rdxNear;
+        Vf8 tyN = (load8(n.bounds[nearY]) - oy) * rdyNear;
+        Vf8 tzN = (load8(n.bounds[nearZ]) - oz) * rdzNear;
+        Vf8 txF = (load8(n.bounds[farX]) - ox) * rdxFar;
+        Vf8 tyF = (load8(n.bounds[farY]) - oy) * rdyFar;
+        Vf8 tzF = (load8(n.bounds[farZ]) - oz) * rdzFar;
+        tNear = maxNanB(txN, maxNanB(tyN, maxNanB(tzN, tMin)));
+        Vf8 tFar = minNanB(txF, minNanB(tyF, minNanB(tzF, splat8(padUp(tMax)))));
+        return tNear <= tFar;
+    }
+};
+
+/// Per-ray constants of the watertight test (Woop et al. 2013, Section 3.1, computed once per ray
+/// instead of once per triangle); the arithmetic below repeats intersectTriangle's operation for
+/// operation, so both give bit-identical t, u, v.
+struct TriRay {
+    int kx, ky, kz;
+    float sx, sy, sz;
+    Vec3f o;
+    float tMin;
+    explicit TriRay(const Ray& ray) : o(ray.o), tMin(ray.tMin) {
+        Vec3f ad = glm::abs(ray.d);
+        kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+        kx = (kz + 1) % 3;
+        ky = (kx + 1) % 3;
+        if (ray.d[kz] < 0.f) std::swap(kx, ky);
+        sx = ray.d[kx] / ray.d[kz];
+        sy = ray.d[ky] / ray.d[kz];
+        sz = 1.f / ray.d[kz];
+    }
+};
+
+struct TriangleCandidate {
+    float t, u, v;
+    int lane;
+};
+
+/// Watertight test of one ray against four triangles (Woop et al. 2013, Fig. 1/Listing 1, four lanes
+/// at once). Returns the nearest lane hit in (tMin, tMax), or lane −1.
+TESSERA_INLINE TriangleCandidate intersectTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
+    const int kx = r.kx, ky = r.ky, kz = r.kz;
+    Vf4 ox = splat4(r.o[kx]), oy = splat4(r.o[ky]), oz = splat4(r.o[kz]);
+    Vf4 sx = splat4(r.sx), sy = splat4(r.sy), sz = splat4(r.sz);
+    Vf4 aX = load4(tri.p[0][kx]) - ox, aY = load4(tri.p[0][ky]) - oy, aZ = load4(tri.p[0][kz]) - oz;
+    Vf4 bX = load4(tri.p[1][kx]) - ox, bY = load4(tri.p[1][ky]) - oy, bZ = load4(tri.p[1][kz]) - oz;
+    Vf4 cX = load4(tri.p[2][kx]) - ox, cY = load4(tri.p[2][ky]) - oy, cZ = load4(tri.p[2][kz]) - oz;
+    Vf4 ax = aX - sx * aZ, ay = aY - sy * aZ;
+    Vf4 bx = bX - sx * bZ, by = bY - sy * bZ;
+    Vf4 cx = cX - sx * cZ, cy = cY - sy * cZ;
+    Vf4 U = cx * by - cy * bx;
+    Vf4 V = ax * cy - ay * cx;
+    Vf4 W = bx * ay - by * ax;
+    Vf4 zero{};
+    uint32_t zeroLanes = moveMask4((U == zero) | (V == zero) | (W == zero));
+    if (zeroLanes) [[unlikely]] {
+        // An edge function is exactly 0: redo it in double precision (paper, Section 3.3), so that
+        // edges shared by two triangles are neither missed nor hit twice.
+        for (int i = 0; i < 4; ++i) {
+            if (!(zeroLanes >> i & 1)) continue;
+            U[i] = float(double(cx[i]) * double(by[i]) - double(cy[i]) * double(bx[i]));
+            V[i] = float(double(ax[i]) * double(cy[i]) - double(ay[i]) * double(cx[i]));
+            W[i] = float(double(bx[i]) * double(ay[i]) - double(by[i]) * double(ax[i]));
+        }
+    }
+    Vi4 sameSign = ((U >= zero) & (V >= zero) & (W >= zero)) | ((U <= zero) & (V <= zero) & (W <= zero));
+    Vf4 det = U + V + W;
+    Vi4 valid = sameSign & (det != zero);
+    if (!moveMask4(valid)) return {0.f, 0.f, 0.f, -1};
+    Vf4 T = U * (sz * aZ) + V * (sz * bZ) + W * (sz * cZ);
+    Vf4 invDet = splat4(1.f) / det;
+    Vf4 t = T * invDet;
+    valid &= (t > splat4(r.tMin)) & (t < splat4(tMax));
+    uint32_t bits = moveMask4(valid);
+    TriangleCandidate best{tMax, 0.f, 0.f, -1};
+    while (bits) {
+        int i = __builtin_ctz(bits);
+        bits &= bits - 1;
+        if (t[i] < best.t) best = {t[i], V[i] * invDet[i], W[i] * invDet[i], i};
+    }
+    return best;
+}
+
+Bounds3f paddedSphereBounds(const Sphere& s) {
+    // The same relative padding as the Embree backend: float rounding of centre ± radius must never
+    // cut off part of the sphere.
+    float pad = 1e-6f * (s.radius + maxComponent(glm::abs(s.center)));
+    Bounds3f b = sphereBounds(s);
+    b.lower -= Vec3f(pad);
+    b.upper += Vec3f(pad);
+    return b;
+}
+
+bool finiteBounds(const Bounds3f& b) { return isFinite(b.lower) && isFinite(b.upper) && !b.empty(); }
+
+void setEmptyChild(BvhAccel::Node8& n, int lane) {
+    for (int a = 0; a < 3; ++a) {
+        n.bounds[a][lane] = kInfinity;
+        n.bounds[3 + a][lane] = -kInfinity;
+    }
+    n.child[lane] = BvhAccel::kLeafBit;  // never visited: no ray enters an inverted box
+}
+
+}  // namespace
+
+BvhAccel::BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, const BvhConfig& config)
+    : geometry_(geometry), config_(config) {
+    auto start = std::chrono::steady_clock::now();
+    bounds_ = geometry.bounds();
+#if defined(TESSERA_X86)
+    useAvx2_ = __builtin_cpu_supports("avx2");
+#endif
+
+    // Primitive references, boxes and centroids: all the builder sees.
+    std::vector<Bounds3f> primBounds;
+    std::vector<Vec3f> centroids;
+    size_t total = geometry.primitiveCount();
+    prims_.reserve(total);
+    primBounds.reserve(total);
+    centroids.reserve(total);
+    for (uint32_t g = 0; g < geometry.meshes.size(); ++g) {
+        const TriangleMesh& mesh = geometry.meshes[g];
+        for (uint32_t i = 0; i < mesh.triangles.size(); ++i) {
+            const glm::uvec3& t = mesh.triangles[i];
+            Bounds3f b;
+            b.extend(mesh.positions[t.x]);
+            b.extend(mesh.positions[t.y]);
+            b.extend(mesh.positions[t.z]);
+            if (!finiteBounds(b)) continue;  // a non-finite vertex can never be hit
+            // The watertight test may place a hit a few ulps outside the exact triangle (its shear
+            // rounds); pad the box by as much so a box face through an edge never hides such a hit.
+            Vec3f pad = 0x1p-20f * glm::max(glm::abs(b.lower), glm::abs(b.upper));
+            b.lower -= pad;
+            b.upper += pad;
+            prims_.push_back({g, i});
+            primBounds.push_back(b);
+            centroids.push_back(b.center());
+        }
+    }
+    for (uint32_t i = 0; i < geometry.spheres.size(); ++i) {
+        Bounds3f b = paddedSphereBounds(geometry.spheres[i]);
+        if (!finiteBounds(b) || !(geometry.spheres[i].radius > 0.f)) continue;
+        prims_.push_back({geometry.sphereGeomId(), i});
+        primBounds.push_back(b);
+        centroids.push_back(b.center());
+    }
+
+    BinaryBvh bin;
+    auto buildTree = [&] { bin = buildBinaryBvh(primBounds, centroids, config_); };
+    if (options.threads > 0) tbb::task_arena(options.threads).execute(buildTree);
+    else buildTree();
+
+    if (!prims_.empty()) {
+        nodes_.reserve(bin.primIndices.size() / 2 + 1);
+        triangles_.reserve(bin.primIndices.size() / 2 + 1);
+        if (bin.nodes[0].isLeaf()) {
+            // A wide root is always an inner node: one leaf child, seven empty lanes.
+            nodes_.emplace_back();
+            for (int i = 0; i < 8; ++i) setEmptyChild(nodes_[0], i);
+            const Bounds3f& b = bin.nodes[0].bounds;
+            for (int a = 0; a < 3; ++a) {
+                nodes_[0].bounds[a][0] = b.lower[a];
+                nodes_[0].bounds[3 + a][0] = b.upper[a];
+            }
+            nodes_[0].child[0] = makeLeaf(bin, bin.nodes[0]);
+        } else {
+            collapse(bin, 0);
+        }
+    }
+    nodes_.shrink_to_fit();
+    triangles_.shrink_to_fit();
+
+    stats_.primitives = total;
+    stats_.memoryBytes = nodes_.size() * sizeof(Node8) + triangles_.size() * sizeof(Triangle4) +
+                         mixedPrims_.size() * sizeof(PrimRef);
+    stats_.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+uint32_t BvhAccel::makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf) {
+    bool allTriangles = true;
+    for (uint32_t i = 0; i < leaf.count; ++i)
+        allTriangles &= prims_[bin.primIndices[leaf.first() + i]].geomId != geometry_.sphereGeomId();
+    if (!allTriangles) {
+        uint32_t first = uint32_t(mixedPrims_.size());
+        for (uint32_t i = 0; i < leaf.count; ++i) mixedPrims_.push_back(prims_[bin.primIndices[leaf.first() + i]]);
+        return kLeafBit | kMixedBit | (first << 4) | leaf.count;
+    }
+    uint32_t firstBlock = uint32_t(triangles_.size());
+    uint32_t blocks = (leaf.count + 3) / 4;
+    for (uint32_t b = 0; b < blocks; ++b) {
+        Triangle4& t = triangles_.emplace_back();
+        for (int lane = 0; lane < 4; ++lane) {
+            uint32_t k = b * 4 + uint32_t(lane);
+            if (k >= leaf.count) {
+                for (int v = 0; v < 3; ++v)
+                    for (int a = 0; a < 3; ++a) t.p[v][a][lane] = kNaN;
+                t.geomId[lane] = t.primId[lane] = kInvalidId;
+                continue;
+            }
+            PrimRef ref = prims_[bin.primIndices[leaf.first() + k]];
+            const TriangleMesh& mesh = geometry_.meshes[ref.geomId];
+            const glm::uvec3& tri = mesh.triangles[ref.primId];
+            for (int v = 0; v < 3; ++v)
+                for (int a = 0; a < 3; ++a) t.p[v][a][lane] = mesh.positions[tri[v]][a];
+            t.geomId[lane] = ref.geomId;
+            t.primId[lane] = ref.primId;
+        }
+    }
+    return kLeafBit | (firstBlock << 2) | (blocks - 1);
+}
+
+uint32_t BvhAccel::collapse(const BinaryBvh& bin, uint32_t binNode) {
+    // Gather up to eight children by repeatedly opening the child of largest surface area (the one
+    // most rays would visit), as in Wald et al. 2008, "Getting Rid of Packets", Section 3.
+    uint32_t kids[8];
+    int count = 2;
+    kids[0] = bin.nodes[binNode].left;
+    kids[1] = bin.nodes[binNode].right;
+    while (count < 8) {
+        int best = -1;
+        float bestArea = -1.f;
+        for (int i = 0; i < count; ++i) {
+            const BvhBuildNode& k = bin.nodes[kids[i]];
+            if (k.isLeaf()) continue;
+            float area = k.bounds.surfaceArea();
+            if (area > bestArea) bestArea = area, best = i;
+        }
+        if (best < 0) break;
+        const BvhBuildNode& open = bin.nodes[kids[best]];
+        kids[best] = open.left;
+        kids[count++] = open.right;
+    }
+    uint32_t index = uint32_t(nodes_.size());
+    nodes_.emplace_back();
+    for (int i = 0; i < 8; ++i) setEmptyChild(nodes_[index], i);
+    for (int i = 0; i < count; ++i) {
+        const BvhBuildNode& k = bin.nodes[kids[i]];
+        uint32_t ref = k.isLeaf() ? makeLeaf(bin, k) : collapse(bin, kids[i]);
+        Node8& n = nodes_[index];  // re-fetched: collapse() may have grown nodes_
+        for (int a = 0; a < 3; ++a) {
+            n.bounds[a][i] = k.bounds.lower[a];
+            n.bounds[3 + a][i] = k.bounds.upper[a];
+        }
+        n.child[i] = ref;
+    }
+    return index;
+}
+
+std::string_view BvhAccel::isa() const { return useAvx2_ ? "avx2" : "sse2/portable"; }
+
+template <bool kAvx>
+TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
+    if (nodes_.empty() || !isTraceableRay(ray)) return false;
+    BoxRay boxRay(ray);
+    TriRay triRay(ray);
+    float tMax = ray.tMax;
+    const Triangle4* bestBlock = nullptr;
+    int bestLane = -1;
+    uint32_t bestSphere = kInvalidId;
+    PrimRef bestMixedTriangle{kInvalidId, kInvalidId};
+    float bestU = 0.f, bestV = 0.f;
+
+    StackEntry stack[kStackSize];
+    int sp = 0;
+    uint32_t ref = 0;
+    while (true) {
+        if (!(ref & kLeafBit)) {
+            const Node8& node = nodes_[ref];
+            Vf8 tNear;
+            uint32_t mask = moveMask8(boxRay.test(node, tMax, tNear));
+            if (mask) {
+                if (!(mask & (mask - 1))) {  // one child: no ordering needed
+                    ref = node.child[__builtin_ctz(mask)];
+                    continue;
+                }
+                // Nearest-first: sort the hit children by entry distance (insertion sort, ≤ 8),
+                // push all but the nearest in far-to-near order, descend into the nearest.
+                StackEntry hits[8];
+                int n = 0;
+                while (mask) {
+                    int i = __builtin_ctz(mask);
+                    mask &= mask - 1;
+                    StackEntry e{node.child[i], tNear[i]};
+                    int j = n++;
+                    while (j > 0 && hits[j - 1].tNear < e.tNear) hits[j] = hits[j - 1], --j;
+                    hits[j] = e;
+                }
+                for (int i = 0; i < n - 1; ++i) stack[sp++] = hits[i];
+                ref = hits[n - 1].ref;
+                continue;
+            }
+        } else if (!(ref & kMixedBit)) {
+            uint32_t first = (ref & ~kLeafBit) >> 2, blocks = (ref & 3u) + 1;
+            for (uint32_t b = 0; b < blocks; ++b) {
+                const Triangle4& tri = triangles_[first + b];
+                TriangleCandidate c = intersectTriangle4(triRay, tri, tMax);
+                if (c.lane < 0) continue;
+                tMax = c.t, bestU = c.u, bestV = c.v;
+                bestBlock = &tri, bestLane = c.lane, bestSphere = kInvalidId, bestMixedTriangle.geomId = kInvalidId;
+            }
+        } else {
+            uint32_t first = (ref & ~(kLeafBit | kMixedBit)) >> 4, count = ref & 15u;
+            Ray clipped = ray;
+            for (uint32_t k = 0; k < count; ++k) {
+                clipped.tMax = tMax;
+                PrimRef p = mixedPrims_[first + k];
+                if (p.geomId == geometry_.sphereGeomId()) {
+                    const Sphere& s = geometry_.spheres[p.primId];
+                    double t = intersectSphere(s.center, s.radius, clipped);
+                    if (t < 0.0 || !(float(t) < tMax)) continue;
+                    tMax = float(t);
+                    bestSphere = p.primId, bestBlock = nullptr, bestMixedTriangle.geomId = kInvalidId;
+                } else {
+                    const TriangleMesh& mesh = geometry_.meshes[p.geomId];
+                    const glm::uvec3& tri = mesh.triangles[p.primId];
+                    TriangleHit th;
+                    if (!intersectTriangle(clipped, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z], th))
+                        continue;
+                    tMax = th.t, bestU = th.u, bestV = th.v;
+                    bestMixedTriangle = p, bestSphere = kInvalidId, bestBlock = nullptr;
+                }
+            }
+        }
+        // Pop the next subtree the ray may still reach before the current closest hit.
+        do {
+            if (sp == 0) goto done;
+            --sp;
+        } while (stack[sp].tNear > padUp(tMax));
+        ref = stack[sp].ref;
+    }
+done:
+    if (bestBlock) {
+        Vec3f p[3];
+        for (int v = 0; v < 3; ++v) p[v] = {bestBlock->p[v][0][bestLane], bestBlock->p[v][1][bestLane], bestBlock->p[v][2][bestLane]};
+        hit.t = tMax, hit.u = bestU, hit.v = bestV;
+        hit.geomId = bestBlock->geomId[bestLane];
+        hit.primId = bestBlock->primId[bestLane];
+        hit.ng = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
+        return true;
+    }
+    if (bestMixedTriangle.geomId != kInvalidId) {
+        const TriangleMesh& mesh = geometry_.meshes[bestMixedTriangle.geomId];
+        const glm::uvec3& tri = mesh.triangles[bestMixedTriangle.primId];
+        const Vec3f &p0 = mesh.positions[tri.x], &p1 = mesh.positions[tri.y], &p2 = mesh.positions[tri.z];
+        hit.t = tMax, hit.u = bestU, hit.v = bestV;
+        hit.geomId = bestMixedTriangle.geomId;
+        hit.primId = bestMixedTriangle.primId;
+        hit.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+        return true;
+    }
+    if (bestSphere != kInvalidId) {
+        const Sphere& s = geometry_.spheres[bestSphere];
+        // Same expressions as the Embree sphere callback and the brute-force backend.
+        Vec3f n = glm::normalize(Vec3f(Vec3d(ray.o) + double(tMax) * Vec3d(ray.d) - Vec3d(s.center)));
+        Vec2f uv = sphereUv(n);
+        hit.t = tMax, hit.u = uv.x, hit.v = uv.y;
+        hit.geomId = geometry_.sphereGeomId();
+        hit.primId = bestSphere;
+        hit.ng = n;
+        return true;
+    }
+    return false;
+}
+
+template <bool kAvx>
+TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
+    if (nodes_.empty() || !isTraceableRay(ray)) return false;
+    BoxRay boxRay(ray);
+    TriRay triRay(ray);
+    const float tMax = ray.tMax;
+    uint32_t stack[kStackSize];
+    int sp = 0;
+    uint32_t ref = 0;
+    while (true) {
+        if (!(ref & kLeafBit)) {
+            // Nearest child first here too: an occluder is usually close to the shadow ray's
+            // origin (the surface it leaves), so the near subtree ends the query soonest.
+            const Node8& node = nodes_[ref];
+            Vf8 tNear;
+            uint32_t mask = moveMask8(boxRay.test(node, tMax, tNear));
+            if (mask) {
+                int nearest = __builtin_ctz(mask);
+                mask &= mask - 1;
+                while (mask) {
+                    int i = __builtin_ctz(mask);
+                    mask &= mask - 1;
+                    if (tNear[i] < tNear[nearest]) std::swap(i, nearest);
+                    stack[sp++] = node.child[i];
+                }
+                ref = node.child[nearest];
+                continue;
+            }
+        } else if (!(ref & kMixedBit)) {
+            uint32_t first = (ref & ~kLeafBit) >> 2, blocks = (ref & 3u) + 1;
+            for (uint32_t b = 0; b < blocks; ++b)
+                if (intersectTriangle4(triRay, triangles_[first + b], tMax).lane >= 0) return true;
+        } else {
+            uint32_t first = (ref & ~(kLeafBit | kMixedBit)) >> 4, count = ref & 15u;
+            for (uint32_t k = 0; k < count; ++k) {
+                PrimRef p = mixedPrims_[first + k];
+                if (p.geomId == geometry_.sphereGeomId()) {
+                    const Sphere& s = geometry_.spheres[p.primId];
+                    if (intersectSphere(s.center, s.radius, ray) >= 0.0) return true;
+                } else {
+                    const TriangleMesh& mesh = geometry_.meshes[p.geomId];
+                    const glm::uvec3& tri = mesh.triangles[p.primId];
+                    TriangleHit th;
+                    if (intersectTriangle(ray, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z], th))
+                        return true;
+                }
+            }
+        }
+        if (sp == 0) return false;
+        ref = stack[--sp];
+    }
+}
+
+#if defined(TESSERA_X86)
+__attribute__((target("avx2"))) bool BvhAccel::intersectAvx2(const Ray& ray, Hit& hit) const {
+    return intersectImpl<true>(ray, hit);
+}
+__attribute__((target("avx2"))) bool BvhAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<true>(ray); }
+#else
+bool BvhAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<false>(ray, hit); }
+bool BvhAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<false>(ray); }
+#endif
+
+bool BvhAccel::intersect(const Ray& ray, Hit& hit) const {
+    return useAvx2_ ? intersectAvx2(ray, hit) : intersectImpl<false>(ray, hit);
+}
+
+bool BvhAccel::occluded(const Ray& ray) const { return useAvx2_ ? occludedAvx2(ray) : occludedImpl<false>(ray); }
+
+uint64_t BvhAccel::structureHash() const {
+    uint64_t h = 0xcbf29ce484222325ULL;
+    auto add = [&](const void* data, size_t bytes) {
+        const auto* p = static_cast<const unsigned char*>(data);
+        for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 0x100000001b3ULL;
+    };
+    add(nodes_.data(), nodes_.size() * sizeof(Node8));
+    add(triangles_.data(), triangles_.size() * sizeof(Triangle4));
+    add(mixedPrims_.data(), mixedPrims_.size() * sizeof(PrimRef));
+    return h;
+}
+
+std::string BvhAccel::checkInvariants() const {
+    std::vector<uint8_t> seen(prims_.size(), 0);
+    // Dense index of (geomId, primId) among the built primitives, to count visits.
+    std::vector<std::vector<uint32_t>> denseOf(geometry_.meshes.size() + 1);
+    for (uint32_t g = 0; g < geometry_.meshes.size(); ++g) denseOf[g].assign(geometry_.meshes[g].triangles.size(), kInvalidId);
+    denseOf.back().assign(geometry_.spheres.size(), kInvalidId);
+    for (uint32_t i = 0; i < prims_.size(); ++i) denseOf[prims_[i].geomId][prims_[i].primId] = i;
+
+    auto primBox = [&](PrimRef p) {
+        Bounds3f b;
+        if (p.geomId == geometry_.sphereGeomId()) return paddedSphereBounds(geometry_.spheres[p.primId]);
+        const TriangleMesh& m = geometry_.meshes[p.geomId];
+        for (int v = 0; v < 3; ++v) b.extend(m.positions[m.triangles[p.primId][v]]);
+        return b;
+    };
+    auto inside = [](const Bounds3f& in, const Bounds3f& out) {
+        return glm::all(glm::greaterThanEqual(in.lower, out.lower)) && glm::all(glm::lessThanEqual(in.upper, out.upper));
+    };
+    std::string problem;
+    auto visitPrim = [&](PrimRef p, const Bounds3f& leafBox) {
+        if (p.geomId >= denseOf.size() || p.primId >= denseOf[p.geomId].size() || denseOf[p.geomId][p.primId] == kInvalidId) {
+            problem = "leaf references an unknown primitive";
+            return;
+        }
+        if (seen[denseOf[p.geomId][p.primId]]++) problem = "primitive " + std::to_string(p.primId) + " reached twice";
+        if (!inside(primBox(p), leafBox)) problem = "primitive " + std::to_string(p.primId) + " outside its leaf box";
+    };
+    std::vector<std::pair<uint32_t, Bounds3f>> todo;
+    if (!nodes_.empty()) {
+        Bounds3f all;
+        all.lower = Vec3f(-kInfinity), all.upper = Vec3f(kInfinity);
+        todo.push_back({0u, all});
+    }
+    size_t visitedNodes = 0;
+    while (!todo.empty() && problem.empty()) {
+        auto [index, parentBox] = todo.back();
+        todo.pop_back();
+        if (++visitedNodes > nodes_.size()) return "a node is reachable more than once";
+        const Node8& n = nodes_[index];
+        for (int i = 0; i < 8; ++i) {
+            Bounds3f box;
+            for (int a = 0; a < 3; ++a) box.lower[a] = n.bounds[a][i], box.upper[a] = n.bounds[3 + a][i];
+            if (box.empty()) continue;
+            if (!inside(box, parentBox)) return "child box outside its parent box in node " + std::to_string(index);
+            uint32_t ref = n.child[i];
+            if (!(ref & kLeafBit)) todo.push_back({ref, box});
+            else if (!(ref & kMixedBit)) {
+                uint32_t first = (ref & ~kLeafBit) >> 2, blocks = (ref & 3u) + 1;
+                for (uint32_t b = 0; b < blocks; ++b)
+                    for (int lane = 0; lane < 4; ++lane)
+                        if (triangles_[first + b].primId[lane] != kInvalidId)
+                            visitPrim({triangles_[first + b].geomId[lane], triangles_[first + b].primId[lane]}, box);
+            } else {
+                uint32_t first = (ref & ~(kLeafBit | kMixedBit)) >> 4, count = ref & 15u;
+                for (uint32_t k = 0; k < count; ++k) visitPrim(mixedPrims_[first + k], box);
+            }
+        }
+    }
+    if (!problem.empty()) return problem;
+    for (size_t i = 0; i < seen.size(); ++i)
+        if (!seen[i]) return "primitive " + std::to_string(prims_[i].primId) + " of geometry " + std::to_string(prims_[i].geomId) + " unreachable";
+    return {};
+}
+
+}  // namespace tessera

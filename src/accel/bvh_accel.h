@@ -1,0 +1,76 @@
+#pragma once
+/// \file bvh_accel.h
+/// Tessera's own BVH: a binned-SAH binary tree (bvh_builder.h) collapsed into an 8-wide BVH with
+/// structure-of-arrays nodes, SIMD box tests and 4-wide watertight triangle tests. Triangles and
+/// spheres; hit records identical in convention to Embree's (see accel.h).
+#include <string>
+#include <vector>
+
+#include "accel/accel.h"
+#include "accel/bvh_builder.h"
+
+namespace tessera {
+
+class BvhAccel final : public Accel {
+public:
+    BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, const BvhConfig& config = {});
+
+    std::string_view name() const override { return "bvh"; }
+    bool intersect(const Ray& ray, Hit& hit) const override;
+    bool occluded(const Ray& ray) const override;
+    Bounds3f bounds() const override { return bounds_; }
+    AccelStats stats() const override { return stats_; }
+
+    const BvhConfig& config() const { return config_; }
+    /// Which traversal kernels run: "avx2" or "sse2/portable".
+    std::string_view isa() const;
+    /// Checks the tree: every primitive with finite bounds reachable exactly once, each child box
+    /// inside its parent's box, every primitive inside its leaf's box. Returns "" or the first problem.
+    std::string checkInvariants() const;
+    size_t nodeCount() const { return nodes_.size(); }
+    /// FNV-1a hash of the nodes and leaf blocks: equal for equal trees (determinism tests).
+    uint64_t structureHash() const;
+
+    /// 8-wide node: child boxes as SoA (bounds[axis][lane] lower, bounds[3 + axis][lane] upper; empty
+    /// lanes hold an inverted box that no ray enters) and child references (see kLeafBit).
+    struct alignas(32) Node8 {
+        float bounds[6][8];
+        uint32_t child[8];
+    };
+    /// Up to four triangles of one leaf, SoA: p[vertex][axis][lane]. Unused lanes hold NaN vertices,
+    /// which the watertight test rejects without a separate mask.
+    struct alignas(16) Triangle4 {
+        float p[3][3][4];
+        uint32_t geomId[4];
+        uint32_t primId[4];
+    };
+    struct PrimRef {
+        uint32_t geomId, primId;
+    };
+
+    /// Child reference: inner node index, or a leaf (kLeafBit). Triangle-only leaf: first Triangle4
+    /// block << 2 | (blocks − 1). Leaf holding a sphere (kMixedBit): first mixedPrims_ index << 4 | count.
+    static constexpr uint32_t kLeafBit = 0x80000000u;
+    static constexpr uint32_t kMixedBit = 0x40000000u;
+
+private:
+    template <bool kAvx> bool intersectImpl(const Ray& ray, Hit& hit) const;
+    template <bool kAvx> bool occludedImpl(const Ray& ray) const;
+    bool intersectAvx2(const Ray& ray, Hit& hit) const;
+    bool occludedAvx2(const Ray& ray) const;
+
+    uint32_t collapse(const BinaryBvh& bin, uint32_t binNode);
+    uint32_t makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf);
+
+    const SceneGeometry& geometry_;
+    BvhConfig config_;
+    std::vector<PrimRef> prims_;  ///< build primitive index → (geomId, primId)
+    std::vector<Node8> nodes_;    ///< node 0 is the root (absent for an empty scene)
+    std::vector<Triangle4> triangles_;
+    std::vector<PrimRef> mixedPrims_;
+    Bounds3f bounds_;
+    AccelStats stats_;
+    bool useAvx2_ = false;
+};
+
+}  // namespace tessera

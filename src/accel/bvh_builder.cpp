@@ -1,0 +1,311 @@
+#include "accel/bvh_builder.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cstring>
+#include <tuple>
+
+#include "accel/bvh_simd.h"
+
+namespace tessera {
+namespace {
+
+using simd::Vf4;
+using simd::Vi4;
+
+constexpr int kMaxBins = 32;
+
+/// One primitive as the builder moves it around: box and centroid in SIMD registers, the primitive
+/// index in the box's unused fourth lane. Partitioning these records (not indices into the caller's
+/// arrays) keeps every pass over a node sequential in memory, as Embree's PrimRef does.
+struct alignas(16) Ref {
+    Vf4 lo, hi, c;
+    uint32_t index() const {
+        uint32_t i;
+        std::memcpy(&i, reinterpret_cast<const char*>(&lo) + 12, 4);
+        return i;
+    }
+};
+
+TESSERA_INLINE Vf4 vmin(Vf4 a, Vf4 b) { return a < b ? a : b; }
+TESSERA_INLINE Vf4 vmax(Vf4 a, Vf4 b) { return a > b ? a : b; }
+
+/// An axis-aligned box in SIMD form (lanes x, y, z; lane 3 ignored).
+struct Box {
+    Vf4 lo = simd::splat4(kInfinity), hi = simd::splat4(-kInfinity);
+    TESSERA_INLINE void extend(Vf4 l, Vf4 h) { lo = vmin(lo, l), hi = vmax(hi, h); }
+    TESSERA_INLINE void extend(const Box& b) { extend(b.lo, b.hi); }
+    bool empty() const { return lo[0] > hi[0] || lo[1] > hi[1] || lo[2] > hi[2]; }
+    /// Half the surface area: SAH only compares ratios, and empty boxes count as 0.
+    float halfArea() const {
+        if (empty()) return 0.f;
+        Vf4 d = hi - lo;
+        return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+    }
+    Bounds3f bounds() const {
+        Bounds3f b;
+        b.lower = Vec3f(lo[0], lo[1], lo[2]);
+        b.upper = Vec3f(hi[0], hi[1], hi[2]);
+        return b;
+    }
+};
+
+/// Per-axis bins of one node: box and count of the primitives whose centroid falls in each bin.
+struct Binning {
+    // Plain SIMD arrays (trivially constructible), initialised for the bins in use only: small
+    // nodes are the majority and clearing 3 × kMaxBins boxes each time dominated the build.
+    Vf4 lo[3][kMaxBins], hi[3][kMaxBins];
+    uint32_t counts[3][kMaxBins];
+
+    explicit Binning(int binCount = kMaxBins) {
+        for (int a = 0; a < 3; ++a)
+            for (int i = 0; i < binCount; ++i) lo[a][i] = simd::splat4(kInfinity), hi[a][i] = simd::splat4(-kInfinity), counts[a][i] = 0;
+    }
+    TESSERA_INLINE void add(int axis, int bin, Vf4 l, Vf4 h) {
+        lo[axis][bin] = vmin(lo[axis][bin], l);
+        hi[axis][bin] = vmax(hi[axis][bin], h);
+        ++counts[axis][bin];
+    }
+    void merge(const Binning& o, int binCount) {
+        for (int a = 0; a < 3; ++a)
+            for (int i = 0; i < binCount; ++i) {
+                lo[a][i] = vmin(lo[a][i], o.lo[a][i]);
+                hi[a][i] = vmax(hi[a][i], o.hi[a][i]);
+                counts[a][i] += o.counts[a][i];
+            }
+    }
+};
+
+/// Maps a centroid to its bin on each axis: k · (c − min) / extent, clamped (Wald 2007, eq. 1). The
+/// same function bins and partitions, so a chosen split can never leave a side empty.
+struct BinMapping {
+    Vf4 lower, scale;
+    int binCount;
+    BinMapping(const Box& centroidBox, int bins) : lower(centroidBox.lo), binCount(bins) {
+        Vf4 extent = centroidBox.hi - centroidBox.lo;
+        for (int a = 0; a < 4; ++a) scale[a] = (a < 3 && extent[a] > 0.f) ? float(bins) * (1.f - 1e-6f) / extent[a] : 0.f;
+    }
+    TESSERA_INLINE Vi4 bins(Vf4 c) const {
+        Vi4 i = __builtin_convertvector((c - lower) * scale, Vi4);
+        Vi4 zero{}, top = Vi4{} + (binCount - 1);
+        i = i < zero ? zero : i;
+        return i > top ? top : i;
+    }
+    TESSERA_INLINE int bin(Vf4 c, int axis) const {
+        return std::clamp(int((c[axis] - lower[axis]) * scale[axis]), 0, binCount - 1);
+    }
+};
+
+class Builder {
+public:
+    Builder(std::span<const Bounds3f> b, std::span<const Vec3f> c, const BvhConfig& cfg, BinaryBvh& out)
+        : primBounds_(b), centroids_(c), config_(cfg), out_(out) {
+        config_.binCount = std::clamp(config_.binCount, 2, kMaxBins);
+        config_.maxLeafSize = std::clamp(config_.maxLeafSize, 1, 15);  // 4 bits in BVH8 leaf refs
+        config_.sahBlockSize = std::max(config_.sahBlockSize, 1);
+    }
+
+    void run() {
+        size_t n = primBounds_.size();
+        if (n == 0) return;
+        refs_.resize(n);
+        Box bounds, centroids;
+        for (size_t i = 0; i < n; ++i) {
+            const Bounds3f& b = primBounds_[i];
+            const Vec3f& c = centroids_[i];
+            float indexBits;
+            uint32_t idx = uint32_t(i);
+            std::memcpy(&indexBits, &idx, 4);
+            refs_[i] = Ref{Vf4{b.lower.x, b.lower.y, b.lower.z, indexBits}, Vf4{b.upper.x, b.upper.y, b.upper.z, 0.f},
+                           Vf4{c.x, c.y, c.z, 0.f}};
+            bounds.extend(refs_[i].lo, refs_[i].hi);
+            centroids.extend(refs_[i].c, refs_[i].c);
+        }
+        out_.nodes.resize(2 * n - 1);
+        build(0, 0, uint32_t(n), bounds, centroids, 0);
+        out_.primIndices.resize(n);
+        for (size_t i = 0; i < n; ++i) out_.primIndices[i] = refs_[i].index();
+        out_.maxDepth = maxDepth_.load();
+    }
+
+private:
+    std::span<const Bounds3f> primBounds_;
+    std::span<const Vec3f> centroids_;
+    BvhConfig config_;
+    BinaryBvh& out_;
+    std::vector<Ref> refs_;
+    std::atomic<uint32_t> maxDepth_{0};
+
+    float blocks(uint32_t n) const { return float((n + uint32_t(config_.sahBlockSize) - 1) / uint32_t(config_.sahBlockSize)); }
+
+    void binRange(uint32_t begin, uint32_t end, const BinMapping& map, Binning& bins) const {
+        for (uint32_t i = begin; i < end; ++i) {
+            const Ref& r = refs_[i];
+            Vi4 b = map.bins(r.c);
+            bins.add(0, b[0], r.lo, r.hi);
+            bins.add(1, b[1], r.lo, r.hi);
+            bins.add(2, b[2], r.lo, r.hi);
+        }
+    }
+
+    Binning binPrimitives(uint32_t begin, uint32_t end, const BinMapping& map) const {
+        if (end - begin < uint32_t(4 * config_.parallelThreshold)) {
+            Binning bins(map.binCount);
+            binRange(begin, end, map, bins);
+            return bins;
+        }
+        // Bin boxes are min/max and counts integers: the merged result is exact in any order.
+        return tbb::parallel_reduce(
+            tbb::blocked_range<uint32_t>(begin, end, 8192), Binning(map.binCount),
+            [&](const tbb::blocked_range<uint32_t>& r, Binning acc) {
+                binRange(r.begin(), r.end(), map, acc);
+                return acc;
+            },
+            [&](Binning a, const Binning& b) {
+                a.merge(b, map.binCount);
+                return a;
+            });
+    }
+
+    struct Split {
+        int axis = -1, bin = 0;
+        float cost = kInfinity;
+        Box left, right;
+    };
+
+    /// Sweeps the bins of each axis from both ends and returns the cheapest plane (in units of
+    /// half-area × blocks; the node's constant terms are added by the caller) with both child boxes.
+    Split findSplit(const Binning& bins, int k) const {
+        Split best;
+        for (int a = 0; a < 3; ++a) {
+            std::array<float, kMaxBins> rightCost{};
+            std::array<Box, kMaxBins> rightBox;
+            Box acc;
+            uint32_t count = 0;
+            for (int i = k - 1; i > 0; --i) {
+                acc.extend(bins.lo[a][i], bins.hi[a][i]);
+                count += bins.counts[a][i];
+                rightCost[i] = acc.halfArea() * blocks(count);
+                rightBox[i] = acc;
+            }
+            acc = Box();
+            count = 0;
+            uint32_t total = 0;
+            for (int i = 0; i < k; ++i) total += bins.counts[a][i];
+            for (int i = 1; i < k; ++i) {
+                acc.extend(bins.lo[a][i - 1], bins.hi[a][i - 1]);
+                count += bins.counts[a][i - 1];
+                if (count == 0 || count == total) continue;
+                float cost = acc.halfArea() * blocks(count) + rightCost[i];
+                if (cost < best.cost) {  // strict: lowest axis, then bin, wins ties
+                    best.axis = a, best.bin = i, best.cost = cost;
+                    best.left = acc, best.right = rightBox[i];
+                }
+            }
+        }
+        return best;
+    }
+
+    void makeLeaf(uint32_t slot, uint32_t begin, uint32_t end, const Box& bounds, uint32_t depth) {
+        BvhBuildNode& node = out_.nodes[slot];
+        node.bounds = bounds.bounds();
+        node.count = end - begin;
+        node.left = begin;
+        uint32_t seen = maxDepth_.load(std::memory_order_relaxed);
+        while (depth > seen && !maxDepth_.compare_exchange_weak(seen, depth)) {}
+    }
+
+    /// Box and centroid box of refs_[begin, end).
+    std::pair<Box, Box> rangeBoxes(uint32_t begin, uint32_t end) const {
+        std::pair<Box, Box> r;
+        for (uint32_t i = begin; i < end; ++i) {
+            r.first.extend(refs_[i].lo, refs_[i].hi);
+            r.second.extend(refs_[i].c, refs_[i].c);
+        }
+        return r;
+    }
+
+    void build(uint32_t slot, uint32_t begin, uint32_t end, const Box& bounds, const Box& centroidBox, uint32_t depth) {
+        uint32_t n = end - begin;
+        if (n == 1) return makeLeaf(slot, begin, end, bounds, depth);
+
+        Ref* refs = refs_.data();
+        uint32_t mid = begin;
+        Split split;
+        // Fewer bins than primitives cannot find more planes: small nodes use about one per primitive.
+        int binCount = std::min(config_.binCount, std::max(4, int(n)));
+        BinMapping map(centroidBox, binCount);
+        bool degenerateCentroids = !(centroidBox.hi[0] > centroidBox.lo[0] || centroidBox.hi[1] > centroidBox.lo[1] ||
+                                     centroidBox.hi[2] > centroidBox.lo[2]);
+        if (!degenerateCentroids && int(depth) < config_.maxSahDepth) {
+            split = findSplit(binPrimitives(begin, end, map), binCount);
+            float area = bounds.halfArea();
+            float leafCost = config_.intersectionCost * blocks(n);
+            float splitCost = area > 0.f ? config_.traversalCost + config_.intersectionCost * split.cost / area : kInfinity;
+            if (n <= uint32_t(config_.maxLeafSize) && leafCost <= splitCost) return makeLeaf(slot, begin, end, bounds, depth);
+        } else if (n <= uint32_t(config_.maxLeafSize)) {
+            return makeLeaf(slot, begin, end, bounds, depth);
+        }
+
+        Box leftBox, rightBox, leftCentroids, rightCentroids;
+        if (split.axis >= 0) {
+            // Partition in place by bin (Hoare), collecting each side's centroid box on the way;
+            // the children's boxes are the unions of their bins, already known from the sweep.
+            int axis = split.axis, bin = split.bin;
+            uint32_t i = begin, j = end;
+            while (true) {
+                while (i < j && map.bin(refs[i].c, axis) < bin) leftCentroids.extend(refs[i].c, refs[i].c), ++i;
+                while (i < j && map.bin(refs[j - 1].c, axis) >= bin) --j, rightCentroids.extend(refs[j].c, refs[j].c);
+                if (i >= j) break;
+                std::swap(refs[i], refs[j - 1]);
+            }
+            mid = i;
+            leftBox = split.left;
+            rightBox = split.right;
+        } else {
+            // No SAH split (identical centroids or too deep): object median along the widest
+            // centroid axis; ties broken by primitive index so the order is fully determined.
+            mid = begin + n / 2;
+            if (!degenerateCentroids) {
+                Vf4 e = centroidBox.hi - centroidBox.lo;
+                int axis = e[0] >= e[1] && e[0] >= e[2] ? 0 : (e[1] >= e[2] ? 1 : 2);
+                std::nth_element(refs + begin, refs + mid, refs + end, [&](const Ref& a, const Ref& b) {
+                    float ca = a.c[axis], cb = b.c[axis];
+                    return ca < cb || (ca == cb && a.index() < b.index());
+                });
+            }
+            std::tie(leftBox, leftCentroids) = rangeBoxes(begin, mid);
+            std::tie(rightBox, rightCentroids) = rangeBoxes(mid, end);
+        }
+
+        uint32_t leftSlot = slot + 1, rightSlot = slot + 2 * (mid - begin);
+        BvhBuildNode& node = out_.nodes[slot];
+        node.bounds = bounds.bounds();
+        node.count = 0;
+        node.left = leftSlot;
+        node.right = rightSlot;
+
+        auto buildLeft = [&] { build(leftSlot, begin, mid, leftBox, leftCentroids, depth + 1); };
+        auto buildRight = [&] { build(rightSlot, mid, end, rightBox, rightCentroids, depth + 1); };
+        if (n >= uint32_t(config_.parallelThreshold)) tbb::parallel_invoke(buildLeft, buildRight);
+        else {
+            buildLeft();
+            buildRight();
+        }
+    }
+};
+
+}  // namespace
+
+BinaryBvh buildBinaryBvh(std::span<const Bounds3f> primBounds, std::span<const Vec3f> centroids, const BvhConfig& config) {
+    BinaryBvh out;
+    Builder(primBounds, centroids, config, out).run();
+    return out;
+}
+
+}  // namespace tessera

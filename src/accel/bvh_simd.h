@@ -1,0 +1,72 @@
+#pragma once
+/// \file bvh_simd.h
+/// The few SIMD operations the BVH traversal needs, written with GCC/Clang vector extensions so
+/// the same code compiles to SSE2 in the default build and to AVX2 inside functions marked
+/// `__attribute__((target("avx2")))` (the traversal is instantiated once per instruction set and
+/// chosen at run time, so the default build never needs -march=native).
+#include <cstdint>
+#include <cstring>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define TESSERA_X86 1
+#endif
+
+// Passing 32-byte vectors by value in an SSE2 function changes the ABI; every helper below is
+// always inlined, so no such call ever exists.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+namespace tessera::simd {
+
+typedef float Vf8 __attribute__((vector_size(32)));
+typedef int32_t Vi8 __attribute__((vector_size(32)));
+typedef float Vf4 __attribute__((vector_size(16)));
+typedef int32_t Vi4 __attribute__((vector_size(16)));
+
+#define TESSERA_INLINE inline __attribute__((always_inline))
+
+TESSERA_INLINE Vf8 load8(const float* p) {
+    Vf8 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+TESSERA_INLINE Vf4 load4(const float* p) {
+    Vf4 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+TESSERA_INLINE Vf8 splat8(float x) { return Vf8{} + x; }
+TESSERA_INLINE Vf4 splat4(float x) { return Vf4{} + x; }
+
+/// max/min that return `b` when `a` is NaN (the order of maxps/minps): a slab whose t is NaN
+/// (ray origin exactly on a plane of a zero direction component) then leaves the interval alone.
+TESSERA_INLINE Vf8 maxNanB(Vf8 a, Vf8 b) { return a > b ? a : b; }
+TESSERA_INLINE Vf8 minNanB(Vf8 a, Vf8 b) { return a < b ? a : b; }
+
+/// Bit i set when lane i of the mask is true (all bits set). Built from two 4-wide movemasks:
+/// an AVX intrinsic here could not be inlined into the shared (default-target) traversal template,
+/// and inside AVX2 code the halves cost one extract.
+TESSERA_INLINE uint32_t moveMask8(Vi8 m) {
+#if defined(TESSERA_X86)
+    __m128 lo, hi;
+    std::memcpy(&lo, &m, 16);
+    std::memcpy(&hi, reinterpret_cast<const char*>(&m) + 16, 16);
+    return uint32_t(_mm_movemask_ps(lo)) | (uint32_t(_mm_movemask_ps(hi)) << 4);
+#else
+    uint32_t bits = 0;
+    for (int i = 0; i < 8; ++i) bits |= uint32_t(m[i] < 0) << i;
+    return bits;
+#endif
+}
+
+TESSERA_INLINE uint32_t moveMask4(Vi4 m) {
+#if defined(TESSERA_X86)
+    return uint32_t(_mm_movemask_ps(reinterpret_cast<__m128>(m)));
+#else
+    uint32_t bits = 0;
+    for (int i = 0; i < 4; ++i) bits |= uint32_t(m[i] < 0) << i;
+    return bits;
+#endif
+}
+
+}  // namespace tessera::simd

@@ -1,0 +1,429 @@
+#include "accel/validate.h"
+
+#include <tbb/parallel_for.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "core/error.h"
+#include "core/frame.h"
+#include "core/rng.h"
+#include "core/sampling.h"
+#include "geometry/intersect.h"
+
+namespace tessera {
+namespace {
+
+/// A scene box that is never empty or flat, so origins and cameras can be placed around it.
+Bounds3f usableBounds(const SceneGeometry& g) {
+    Bounds3f b = g.bounds();
+    if (b.empty() || !isFinite(b.lower) || !isFinite(b.upper)) {
+        b.lower = Vec3f(-1.f);
+        b.upper = Vec3f(1.f);
+    }
+    float pad = 1e-3f * std::max(1e-3f, maxComponent(b.upper - b.lower));
+    b.lower -= Vec3f(pad);
+    b.upper += Vec3f(pad);
+    return b;
+}
+
+Vec3f randomPoint(Pcg32& rng, const Bounds3f& b) {
+    return b.lower + (b.upper - b.lower) * Vec3f(rng.nextFloat(), rng.nextFloat(), rng.nextFloat());
+}
+
+/// The surface point of a hit, reconstructed from the primitive (as Scene::interaction does).
+Vec3f hitPoint(const SceneGeometry& g, const Ray& ray, const Hit& h) {
+    if (h.geomId < g.meshes.size()) {
+        const TriangleMesh& m = g.meshes[h.geomId];
+        const glm::uvec3& t = m.triangles[h.primId];
+        return (1.f - h.u - h.v) * m.positions[t.x] + h.u * m.positions[t.y] + h.v * m.positions[t.z];
+    }
+    const Sphere& s = g.spheres[h.primId];
+    return sphereSurfacePoint(s.center, s.radius, ray.o + h.t * ray.d);
+}
+
+Ray primaryRay(const Camera& cam, size_t i, Pcg32& rng) {
+    size_t w = size_t(cam.width());
+    Vec2f raster(float(i % w) + rng.nextFloat(), float((i / w) % size_t(cam.height())) + rng.nextFloat());
+    return cam.generateRay(raster, Vec2f(0.5f));
+}
+
+Camera makeCamera(const Bounds3f& b, const std::optional<CameraDesc>& camera, size_t count) {
+    int side = std::max(1, int(std::ceil(std::sqrt(double(count)))));
+    return Camera(camera ? *camera : framingCamera(b), side, side);
+}
+
+/// Double-precision Möller–Trumbore (1997) without the edge test: t and barycentrics (b1, b2) of the
+/// ray's crossing with the triangle's plane. False when the ray is parallel to it.
+bool planeHit(const Ray& r, const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, double& t, double& b1, double& b2) {
+    Vec3d o(r.o), d(r.d), e1 = p1 - p0, e2 = p2 - p0;
+    Vec3d pv = glm::cross(d, e2);
+    double det = glm::dot(e1, pv);
+    if (det == 0.0) return false;
+    Vec3d tv = o - p0;
+    b1 = glm::dot(tv, pv) / det;
+    Vec3d qv = glm::cross(tv, e1);
+    b2 = glm::dot(d, qv) / det;
+    t = glm::dot(e2, qv) / det;
+    return true;
+}
+
+/// Distance between the line o + s·d and the segment [a, b], in double precision.
+double lineSegmentDistance(const Vec3d& o, const Vec3d& d, const Vec3d& a, const Vec3d& b) {
+    Vec3d e = b - a, w0 = a - o;
+    double dd = glm::dot(d, d), ee = glm::dot(e, e), de = glm::dot(d, e), dw = glm::dot(d, w0), ew = glm::dot(e, w0);
+    double den = dd * ee - de * de;
+    double s = den > 1e-300 * dd * ee ? (de * dw - dd * ew) / den : 0.0;  // segment parameter
+    s = std::clamp(s, 0.0, 1.0);
+    Vec3d q = a + s * e;
+    double lineS = glm::dot(q - o, d) / dd;
+    return glm::length(o + lineS * d - q);
+}
+
+/// How much float rounding of a triangle's vertices can move its plane and edges, relative to a
+/// well-shaped triangle: longest edge² / (2·area) ≈ 1 / sin(smallest angle). About 1–3 for ordinary
+/// triangles, 1e5 for a 10 × 1e-4 sliver, whose plane (and so t) no float test can pin down.
+double conditionNumber(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2) {
+    double longest = std::max({glm::length(p1 - p0), glm::length(p2 - p1), glm::length(p0 - p2)});
+    double area2 = glm::length(glm::cross(p1 - p0, p2 - p0));
+    return area2 > 0.0 ? std::max(1.0, longest * longest / area2) : 1e30;
+}
+
+/// What double precision says about a primitive along a ray: the t where the ray meets it (or
+/// passes closest), and whether that point is within `slack` (world units) of the primitive's
+/// boundary, where both a hit and a miss are admissible.
+struct PrimCheck {
+    bool hitInside = false;  ///< strictly inside, farther than slack from the boundary
+    bool nearBoundary = false;
+    double t = -1.0;
+    double slack = 0.0;
+};
+
+PrimCheck checkPrimitive(const SceneGeometry& g, const Ray& r, uint32_t geomId, uint32_t primId, float edgeUlps) {
+    PrimCheck c;
+    Vec3d o(r.o), d(r.d);
+    double dLen = glm::length(d);
+    if (geomId < g.meshes.size()) {
+        const TriangleMesh& m = g.meshes[geomId];
+        const glm::uvec3& tri = m.triangles[primId];
+        Vec3d p[3] = {Vec3d(m.positions[tri.x]), Vec3d(m.positions[tri.y]), Vec3d(m.positions[tri.z])};
+        double scale = glm::length(o);
+        for (const Vec3d& q : p) scale = std::max(scale, glm::length(q));
+        double t = 0.0, b1 = 0.0, b2 = 0.0;
+        bool plane = planeHit(r, p[0], p[1], p[2], t, b1, b2);
+        c.t = plane ? t : -1.0;
+        c.slack = edgeUlps * 0x1p-24 * (scale + (plane ? std::abs(t) * dLen : 0.0)) * conditionNumber(p[0], p[1], p[2]);
+        double edgeDist = std::min({lineSegmentDistance(o, d, p[0], p[1]), lineSegmentDistance(o, d, p[1], p[2]),
+                                    lineSegmentDistance(o, d, p[2], p[0])});
+        c.nearBoundary = edgeDist <= c.slack;
+        if (!plane) {
+            // Parallel to the plane: only touching an edge counts, at the closest approach.
+            if (c.nearBoundary) c.t = glm::dot(p[0] - o, d) / (dLen * dLen);
+            return c;
+        }
+        bool inside = b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0;
+        c.hitInside = inside && !c.nearBoundary;
+        if (!inside && !c.nearBoundary) c.t = -1.0;
+        return c;
+    }
+    const Sphere& s = g.spheres[primId];
+    Vec3d ctr(s.center);
+    double proj = glm::dot(ctr - o, d) / (dLen * dLen);
+    double dist = glm::length(o + proj * d - ctr);
+    double scale = std::max(glm::length(o), glm::length(ctr) + s.radius);
+    c.slack = edgeUlps * 0x1p-24 * scale;
+    c.nearBoundary = std::abs(dist - double(s.radius)) <= c.slack;
+    double t = intersectSphere(s.center, s.radius, r);
+    c.t = t >= 0.0 ? t : (c.nearBoundary ? proj : -1.0);
+    c.hitInside = t >= 0.0 && !c.nearBoundary;
+    return c;
+}
+
+double tTolerance(const Ray& r, double t, const ValidationTolerances& tol, double slack) {
+    // Relative t, plus the positional slack of the primitive expressed along the ray.
+    return tol.tRelative * std::abs(t) + slack / glm::length(Vec3d(r.d));
+}
+
+/// Same primitive: t, (u, v) and normal must agree. For triangles the tolerances are in world units
+/// (the float error of a test is a few ulps of the coordinates' magnitude), turned into t and
+/// barycentrics through the angle between ray and plane: a grazing ray's t is ill-conditioned.
+bool sameHitRecord(const SceneGeometry& g, const Ray& r, const Hit& a, const Hit& b, const ValidationTolerances& tol,
+                   std::string& why) {
+    Vec3d d(r.d);
+    double dLen = glm::length(d);
+    if (b.geomId == g.sphereGeomId()) {
+        double tTol = tol.tRelative * std::abs(double(b.t)) + 1e-6 * glm::length(Vec3d(r.o)) / dLen +
+                      4.0 * 0x1p-24 * g.spheres[b.primId].radius / dLen;
+        if (std::abs(double(a.t) - double(b.t)) > tTol) return why = "t differs", false;
+        if (glm::dot(a.ng, b.ng) < tol.normalCos) return why = "normal differs", false;
+        float du = std::abs(a.u - b.u), dv = std::abs(a.v - b.v);
+        du = std::min(du, 1.f - du);                   // φ wraps around
+        bool pole = std::abs(b.ng.y) > 0.9999f;        // φ undefined at the poles
+        if ((!pole && du > tol.uv) || dv > tol.uv) return why = "u, v differ", false;
+        return true;
+    }
+    const TriangleMesh& m = g.meshes[b.geomId];
+    const glm::uvec3& tri = m.triangles[b.primId];
+    Vec3d p0(m.positions[tri.x]), e1 = Vec3d(m.positions[tri.y]) - p0, e2 = Vec3d(m.positions[tri.z]) - p0;
+    double scale = std::max({glm::length(Vec3d(r.o)), glm::length(p0), glm::length(p0 + e1), glm::length(p0 + e2)});
+    double slack = tol.edgeUlps * 0x1p-24 * (scale + std::abs(double(b.t)) * dLen) * conditionNumber(p0, p0 + e1, p0 + e2);
+    Vec3d n = glm::normalize(glm::cross(e1, e2));
+    double cosine = std::max(std::abs(glm::dot(n, d)) / dLen, 1e-6);
+    double tTol = tol.tRelative * std::abs(double(b.t)) + slack / (cosine * dLen);
+    if (std::abs(double(a.t) - double(b.t)) > tTol) return why = "t differs", false;
+    if (glm::dot(a.ng, b.ng) < tol.normalCos) return why = "normal differs", false;
+    double du = double(a.u) - double(b.u), dv = double(a.v) - double(b.v);
+    bool uvClose = std::abs(du) <= tol.uv && std::abs(dv) <= tol.uv;
+    if (!uvClose && glm::length(du * e1 + dv * e2) > slack / cosine) return why = "u, v differ", false;
+    return true;
+}
+
+/// True when the tested hit's t and (u, v) are at least about as close to the double-precision
+/// answer on that primitive as the reference's (within a factor 2 or 1e-7 relative).
+bool closerToTruth(const SceneGeometry& g, const Ray& r, const Hit& test, const Hit& ref) {
+    if (test.geomId == g.sphereGeomId()) {
+        const Sphere& s = g.spheres[test.primId];
+        double t = intersectSphere(s.center, s.radius, r);
+        if (t < 0.0) return false;
+        return std::abs(test.t - t) <= 2.0 * std::abs(ref.t - t) + 1e-7 * t;
+    }
+    const TriangleMesh& m = g.meshes[test.geomId];
+    const glm::uvec3& tri = m.triangles[test.primId];
+    double t, b1, b2;
+    if (!planeHit(r, Vec3d(m.positions[tri.x]), Vec3d(m.positions[tri.y]), Vec3d(m.positions[tri.z]), t, b1, b2)) return false;
+    auto within = [](double mine, double theirs, double truth, double scale) {
+        return std::abs(mine - truth) <= 2.0 * std::abs(theirs - truth) + 1e-7 * scale;
+    };
+    return within(test.t, ref.t, t, std::abs(t)) && within(test.u, ref.u, b1, 1.0) && within(test.v, ref.v, b2, 1.0);
+}
+
+/// Classifies one ray. Returns 0 agreement, 1 tie, 2 error (with `why`).
+int classify(const SceneGeometry& g, const Ray& r, bool th, const Hit& ht, bool rh, const Hit& hr,
+             const ValidationTolerances& tol, std::string& why) {
+    if (!th && !rh) return 0;
+    if (th && rh && ht.geomId == hr.geomId && ht.primId == hr.primId) {
+        if (sameHitRecord(g, r, ht, hr, tol, why)) return 0;
+        // Ill-conditioned primitives (long slivers) put both float tests far from the truth: what
+        // matters is that ours is no worse than the reference, judged in double precision.
+        return closerToTruth(g, r, ht, hr) ? 1 : 2;
+    }
+    if (th != rh) {
+        const Hit& h = th ? ht : hr;
+        PrimCheck c = checkPrimitive(g, r, h.geomId, h.primId, tol.edgeUlps);
+        if (c.nearBoundary) return 1;
+        // A hit within the tolerance of tMin or tMax may be reported either way.
+        double tTol = tTolerance(r, h.t, tol, c.slack);
+        if (std::abs(double(h.t) - double(r.tMin)) <= tTol || std::abs(double(h.t) - double(r.tMax)) <= tTol) return 1;
+        // Our hit confirmed in double precision, inside the primitive and the ray's range: the
+        // reference is the one that missed.
+        if (th && c.hitInside && c.t > double(r.tMin) && c.t < double(r.tMax)) return 1;
+        why = th ? "hit where the reference misses" : "missed a hit of the reference";
+        return 2;
+    }
+    // Different primitives: a tie when both are hit (or grazed) at the same distance, or when the
+    // nearer one is only grazed at an edge (which either answer may include or skip).
+    PrimCheck ct = checkPrimitive(g, r, ht.geomId, ht.primId, tol.edgeUlps);
+    PrimCheck cr = checkPrimitive(g, r, hr.geomId, hr.primId, tol.edgeUlps);
+    if (ct.t < 0.0 || cr.t < 0.0) return why = "different primitive, not hit in double precision", 2;
+    double tTol = std::max(tTolerance(r, ct.t, tol, ct.slack), tTolerance(r, cr.t, tol, cr.slack));
+    if (std::abs(ct.t - cr.t) <= tTol && std::abs(double(ht.t) - double(hr.t)) <= tTol) return 1;
+    const PrimCheck& nearer = ct.t < cr.t ? ct : cr;
+    if (nearer.nearBoundary) return 1;
+    // Ours is a real hit (double precision) no farther than the reference's: the reference skipped it.
+    if (ct.hitInside && ct.t > double(r.tMin) && ct.t <= cr.t + tTol) return 1;
+    why = "different primitive at a different distance";
+    return 2;
+}
+
+}  // namespace
+
+std::string_view toString(RayKind kind) {
+    switch (kind) {
+        case RayKind::Primary: return "primary";
+        case RayKind::Random: return "random";
+        case RayKind::Diffuse: return "diffuse";
+        case RayKind::Grazing: return "grazing";
+    }
+    return "?";
+}
+
+RayKind parseRayKind(std::string_view name) {
+    for (RayKind k : kAllRayKinds)
+        if (toString(k) == name) return k;
+    throw InputError("unknown ray kind '" + std::string(name) + "' (known: primary, random, diffuse, grazing)");
+}
+
+CameraDesc framingCamera(const Bounds3f& b) {
+    CameraDesc desc;
+    Vec3f center = b.center();
+    float radius = 0.5f * glm::length(b.upper - b.lower);
+    desc.yfov = 0.7f;
+    float distance = radius / std::sin(0.5f * desc.yfov) * 1.05f;
+    Vec3f eye = center + distance * glm::normalize(Vec3f(0.35f, 0.3f, 1.f));
+    desc.cameraToWorld = glm::inverse(glm::lookAt(eye, center, Vec3f(0, 1, 0)));
+    desc.znear = std::max(1e-4f, 1e-3f * radius);
+    return desc;
+}
+
+std::vector<Ray> generateRays(const SceneGeometry& g, const Accel& reference, RayKind kind, size_t count,
+                              uint64_t seed, const std::optional<CameraDesc>& camera) {
+    std::vector<Ray> rays;
+    rays.reserve(count);
+    Bounds3f b = usableBounds(g);
+    Vec3f ext = b.upper - b.lower;
+    float diag = glm::length(ext);
+    Pcg32 rng(hashCombine(seed, uint64_t(kind)), 0);
+    switch (kind) {
+        case RayKind::Primary: {
+            Camera cam = makeCamera(b, camera, count);
+            for (size_t i = 0; i < count; ++i) rays.push_back(primaryRay(cam, i, rng));
+            break;
+        }
+        case RayKind::Random: {
+            for (size_t i = 0; i < count; ++i) {
+                Ray r;
+                r.o = b.lower - 0.25f * ext + 1.5f * ext * Vec3f(rng.nextFloat(), rng.nextFloat(), rng.nextFloat());
+                uint32_t variant = rng.nextU32() % 8;
+                if (variant < 3) {
+                    r.d = glm::normalize(randomPoint(rng, b) - r.o);
+                } else if (variant == 3) {
+                    // Axis-aligned, with signed zeros: the octant must come from the sign bit.
+                    uint32_t axis = rng.nextU32() % 3, signs = rng.nextU32();
+                    for (int a = 0; a < 3; ++a) r.d[a] = (signs >> a & 1) ? -0.f : 0.f;
+                    r.d[axis] = (signs >> 3 & 1) ? -1.f : 1.f;
+                } else {
+                    r.d = sampleUniformSphere(rng.next2D());
+                }
+                if (variant == 7) r.tMin = 0.5f * diag * rng.nextFloat();  // a clipped start
+                if (rng.nextU32() % 8 == 0) r.tMax = diag * rng.nextFloat();  // a clipped end
+                if (rng.nextU32() % 4 == 0) r.d *= 0.01f + 10.f * rng.nextFloat();  // not unit length
+                rays.push_back(r);
+            }
+            break;
+        }
+        case RayKind::Diffuse: {
+            Camera cam = makeCamera(b, camera, count);
+            size_t attempts = 0;
+            while (rays.size() < count && attempts < 4 * count + 64) {
+                Ray pr = primaryRay(cam, attempts++, rng);
+                Hit h;
+                if (!reference.intersect(pr, h)) continue;
+                Vec3f p = hitPoint(g, pr, h);
+                Vec3f n = glm::dot(h.ng, pr.d) < 0.f ? h.ng : -h.ng;
+                Vec3f local = sampleCosineHemisphere(rng.next2D());
+                Frame f(n);
+                rays.push_back(spawnRay(p, n, f.toWorld(local)));
+            }
+            // A scene the camera barely sees: fill up with random rays.
+            if (rays.size() < count) {
+                std::vector<Ray> more = generateRays(g, reference, RayKind::Random, count - rays.size(), seed + 1, camera);
+                rays.insert(rays.end(), more.begin(), more.end());
+            }
+            break;
+        }
+        case RayKind::Grazing: {
+            size_t triCount = 0;
+            for (const TriangleMesh& m : g.meshes) triCount += m.triangles.size();
+            size_t prims = triCount + g.spheres.size();
+            for (size_t i = 0; i < count; ++i) {
+                Ray r;
+                if (prims == 0) {
+                    r.o = randomPoint(rng, b);
+                    r.d = sampleUniformSphere(rng.next2D());
+                    rays.push_back(r);
+                    continue;
+                }
+                size_t pick = size_t(rng.nextU32()) % prims;
+                Vec3f target, tangent, normal;
+                if (pick < triCount) {
+                    uint32_t gi = 0;
+                    while (pick >= g.meshes[gi].triangles.size()) pick -= g.meshes[gi++].triangles.size();
+                    const TriangleMesh& m = g.meshes[gi];
+                    const glm::uvec3& t = m.triangles[pick];
+                    Vec3f p[3] = {m.positions[t.x], m.positions[t.y], m.positions[t.z]};
+                    int e = int(rng.nextU32() % 3);
+                    float w = (rng.nextU32() % 4 == 0) ? 0.f : rng.nextFloat();  // a vertex or a point on an edge
+                    target = p[e] + w * (p[(e + 1) % 3] - p[e]);
+                    normal = glm::cross(p[1] - p[0], p[2] - p[0]);
+                    tangent = p[(e + 1) % 3] - p[e];
+                } else {
+                    const Sphere& s = g.spheres[pick - triCount];
+                    normal = sampleUniformSphere(rng.next2D());
+                    target = s.center + s.radius * normal;
+                    tangent = glm::cross(normal, sampleUniformSphere(rng.next2D()));
+                }
+                float nLen = glm::length(normal), tLen = glm::length(tangent);
+                if (rng.nextU32() % 2 == 0 && nLen > 0.f && tLen > 0.f && std::isfinite(nLen)) {
+                    // Nearly tangent: mostly along the surface, a little across it.
+                    Vec3f side = glm::cross(normal / nLen, tangent / tLen);
+                    Vec3f inPlane = glm::normalize(tangent / tLen * (rng.nextFloat() - 0.5f) + side * (rng.nextFloat() - 0.5f) + Vec3f(1e-20f));
+                    r.d = glm::normalize(inPlane + (rng.nextFloat() - 0.5f) * 2e-3f * normal / nLen);
+                } else {
+                    r.d = sampleUniformSphere(rng.next2D());
+                }
+                if (!isFinite(r.d)) r.d = sampleUniformSphere(rng.next2D());
+                r.o = target - r.d * (diag * (0.05f + rng.nextFloat()));
+                rays.push_back(r);
+            }
+            break;
+        }
+    }
+    return rays;
+}
+
+void ValidationResult::merge(const ValidationResult& o, size_t maxExamples) {
+    rays += o.rays;
+    agreements += o.agreements;
+    ties += o.ties;
+    errors += o.errors;
+    for (const ValidationExample& e : o.examples)
+        if (examples.size() < maxExamples) examples.push_back(e);
+}
+
+ValidationResult compareAccels(const Accel& test, const Accel& reference, const SceneGeometry& g,
+                               std::span<const Ray> rays, RayKind kind, const ValidationTolerances& tol,
+                               size_t maxExamples) {
+    constexpr size_t kChunk = 4096;
+    size_t chunks = (rays.size() + kChunk - 1) / kChunk;
+    std::vector<ValidationResult> partial(chunks);
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        ValidationResult& res = partial[c];
+        for (size_t i = c * kChunk; i < std::min(rays.size(), (c + 1) * kChunk); ++i) {
+            const Ray& r = rays[i];
+            Hit ht, hr;
+            bool th = test.intersect(r, ht), rh = reference.intersect(r, hr);
+            std::string why;
+            int verdict = classify(g, r, th, ht, rh, hr, tol, why);
+            if (verdict != 2 && test.occluded(r) != th) verdict = 2, why = "occluded() disagrees with intersect()";
+            ++res.rays;
+            if (verdict == 0) ++res.agreements;
+            else if (verdict == 1) ++res.ties;
+            else {
+                ++res.errors;
+                if (res.examples.size() < maxExamples) res.examples.push_back({kind, i, r, th, rh, ht, hr, why});
+            }
+        }
+    });
+    ValidationResult total;
+    for (const ValidationResult& p : partial) total.merge(p, maxExamples);
+    return total;
+}
+
+nlohmann::json toJson(const Ray& r) {
+    return {{"o", {r.o.x, r.o.y, r.o.z}}, {"d", {r.d.x, r.d.y, r.d.z}}, {"tMin", r.tMin},
+            {"tMax", std::isinf(r.tMax) ? nlohmann::json("inf") : nlohmann::json(r.tMax)}};
+}
+
+nlohmann::json toJson(const Hit& h, bool found) {
+    if (!found) return nullptr;
+    return {{"t", h.t}, {"u", h.u}, {"v", h.v}, {"primId", h.primId}, {"geomId", h.geomId}, {"ng", {h.ng.x, h.ng.y, h.ng.z}}};
+}
+
+nlohmann::json toJson(const ValidationResult& r) {
+    nlohmann::json examples = nlohmann::json::array();
+    for (const ValidationExample& e : r.examples)
+        examples.push_back({{"kind", std::string(toString(e.kind))}, {"ray_index", e.rayIndex}, {"ray", toJson(e.ray)},
+                            {"reason", e.reason}, {"test", toJson(e.test, e.testHit)}, {"reference", toJson(e.ref, e.refHit)}});
+    return {{"rays", r.rays}, {"agreements", r.agreements}, {"ties", r.ties}, {"errors", r.errors}, {"examples", examples}};
+}
+
+}  // namespace tessera

@@ -1,0 +1,206 @@
+/// \file bench_accel_command.cpp
+/// `tessera bench-accel INPUT...`: build time, memory and ray throughput of several acceleration
+/// structures in one process, on identical ray sets, with interleaved repeats (run-to-run spread on
+/// shared machines reaches 40%: only same-process ratios are meaningful) and medians.
+#include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <atomic>
+#include <iomanip>
+#include <map>
+#include <iostream>
+#include <sstream>
+
+#include "accel/bvh_accel.h"
+#include "accel/validate.h"
+#include "app/commands.h"
+#include "core/error.h"
+#include "core/frame.h"
+#include "core/rng.h"
+#include "core/sampling.h"
+#include "scene/mesh_loader.h"
+
+namespace tessera::app {
+namespace {
+
+std::vector<std::string> splitList(const std::string& s) {
+    std::vector<std::string> out;
+    std::stringstream ss(s);
+    std::string item;
+    while (std::getline(ss, item, ','))
+        if (!item.empty()) out.push_back(item);
+    return out;
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
+}
+
+struct RaySets {
+    std::vector<Ray> primary, diffuse, shadow;
+    const std::vector<Ray>& get(const std::string& kind) const {
+        return kind == "primary" ? primary : kind == "diffuse" ? diffuse : shadow;
+    }
+};
+
+/// Primary rays through every pixel centre; from their hits (found with `oracle`), one cosine bounce
+/// each (shuffled, so consecutive rays are incoherent) and one shadow ray to a random point on the
+/// top face of the scene's bounds.
+RaySets makeRays(const SceneGeometry& g, const Accel& oracle, const std::optional<CameraDesc>& camDesc, int resolution,
+                 uint64_t seed) {
+    RaySets sets;
+    Bounds3f b = g.bounds();
+    if (b.empty()) b.lower = Vec3f(-1.f), b.upper = Vec3f(1.f);
+    Camera cam(camDesc ? *camDesc : framingCamera(b), resolution, resolution);
+    for (int y = 0; y < resolution; ++y)
+        for (int x = 0; x < resolution; ++x) sets.primary.push_back(cam.generateRay(Vec2f(x + 0.5f, y + 0.5f), Vec2f(0.5f)));
+    Pcg32 rng(seed, 0);
+    for (const Ray& r : sets.primary) {
+        Hit h;
+        if (!oracle.intersect(r, h)) continue;
+        Vec3f p;
+        if (h.geomId < g.meshes.size()) {
+            const TriangleMesh& m = g.meshes[h.geomId];
+            const glm::uvec3& t = m.triangles[h.primId];
+            p = (1.f - h.u - h.v) * m.positions[t.x] + h.u * m.positions[t.y] + h.v * m.positions[t.z];
+        } else {
+            p = r.o + h.t * r.d;
+        }
+        Vec3f n = glm::dot(h.ng, r.d) < 0.f ? h.ng : -h.ng;
+        sets.diffuse.push_back(spawnRay(p, n, Frame(n).toWorld(sampleCosineHemisphere(rng.next2D()))));
+        Vec3f target(b.lower.x + rng.nextFloat() * (b.upper.x - b.lower.x), b.upper.y,
+                     b.lower.z + rng.nextFloat() * (b.upper.z - b.lower.z));
+        sets.shadow.push_back(spawnShadowRay(p, n, target, Vec3f(0.f)));
+    }
+    for (size_t i = sets.diffuse.size(); i > 1; --i) std::swap(sets.diffuse[i - 1], sets.diffuse[rng.nextU32() % i]);
+    return sets;
+}
+
+/// Seconds to trace all rays (closest hit, or any hit for shadow rays); `checksum` keeps the work.
+double traceSeconds(const Accel& accel, const std::vector<Ray>& rays, bool anyHit, int threads, size_t& checksum) {
+    auto start = std::chrono::steady_clock::now();
+    size_t hits = 0;
+    if (threads == 1) {
+        Hit h;
+        for (const Ray& r : rays) hits += anyHit ? accel.occluded(r) : accel.intersect(r, h);
+    } else {
+        std::atomic<size_t> total{0};
+        auto body = [&] {
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
+                size_t local = 0;
+                Hit h;
+                for (size_t i = range.begin(); i != range.end(); ++i) local += anyHit ? accel.occluded(rays[i]) : accel.intersect(rays[i], h);
+                total += local;
+            });
+        };
+        if (threads > 0) tbb::task_arena(threads).execute(body);
+        else body();
+        hits = total;
+    }
+    checksum += hits;
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+nlohmann::json configJson(const BvhConfig& c) {
+    return {{"traversalCost", c.traversalCost}, {"intersectionCost", c.intersectionCost}, {"sahBlockSize", c.sahBlockSize},
+            {"maxLeafSize", c.maxLeafSize}, {"binCount", c.binCount}, {"parallelThreshold", c.parallelThreshold},
+            {"maxSahDepth", c.maxSahDepth}, {"width", 8}, {"leaf", "Triangle4 watertight (Woop 2013)"}};
+}
+
+}  // namespace
+
+Runner addBenchAccelCommand(CLI::App& app) {
+    struct Options {
+        std::vector<std::string> inputs;
+        std::string accels = "bvh,embree", rays = "primary,diffuse,shadow";
+        int threads = 1, repeat = 5, resolution = 1024;
+        uint64_t seed = 1;
+        bool json = false;
+    };
+    auto opt = std::make_shared<Options>();
+    CLI::App* cmd = app.add_subcommand("bench-accel", "Build time, memory and rays/s of acceleration structures on identical rays");
+    cmd->add_option("INPUT", opt->inputs, "glTF scenes, PLY (.ply.gz) or OBJ meshes")->required();
+    cmd->add_option("--accel", opt->accels, "comma-separated structures")->capture_default_str();
+    cmd->add_option("--threads", opt->threads, "threads for building and tracing (0 = all)")->capture_default_str();
+    cmd->add_option("--rays", opt->rays, "ray kinds: primary, diffuse, shadow")->capture_default_str();
+    cmd->add_option("--repeat", opt->repeat, "interleaved repeats (the median is reported)")->capture_default_str();
+    cmd->add_option("--resolution", opt->resolution, "primary rays: a square image of this many pixels a side")->capture_default_str();
+    cmd->add_option("--seed", opt->seed, "seed of the diffuse and shadow rays")->capture_default_str();
+    cmd->add_flag("--json", opt->json, "print one JSON object instead of text");
+    return [opt] {
+        std::vector<std::string> accels = splitList(opt->accels), kinds = splitList(opt->rays);
+        for (const std::string& k : kinds)
+            if (k != "primary" && k != "diffuse" && k != "shadow") throw InputError("--rays: unknown kind '" + k + "'");
+        AccelOptions options;
+        options.threads = opt->threads;
+        nlohmann::json report = {{"threads", opt->threads}, {"repeat", opt->repeat}, {"resolution", opt->resolution},
+                                 {"bvhConfig", configJson(BvhConfig{})}, {"inputs", nlohmann::json::array()}};
+        if (!opt->json) std::cout << "config: threads " << opt->threads << ", repeat " << opt->repeat << ", bvh "
+                                  << configJson(BvhConfig{}).dump() << "\n";
+        for (const std::string& input : opt->inputs) {
+            std::vector<std::string> warnings;
+            std::optional<CameraDesc> camera;
+            SceneGeometry g = loadGeometryFile(input, camera, warnings);
+            RaySets rays;
+            {
+                auto oracle = createAccel("embree", g, options);
+                rays = makeRays(g, *oracle, camera, opt->resolution, opt->seed);
+            }
+            std::map<std::string, std::vector<double>> buildSeconds;
+            std::map<std::string, std::map<std::string, std::vector<double>>> mrays;
+            std::map<std::string, AccelStats> stats;
+            size_t checksum = 0;
+            for (int rep = 0; rep < opt->repeat; ++rep) {
+                for (const std::string& name : accels) {  // interleaved: each repeat runs every structure
+                    auto accel = createAccel(name, g, options);
+                    stats[name] = accel->stats();
+                    buildSeconds[name].push_back(accel->stats().buildSeconds);
+                    for (const std::string& kind : kinds) {
+                        const std::vector<Ray>& set = rays.get(kind);
+                        double s = traceSeconds(*accel, set, kind == "shadow", opt->threads, checksum);
+                        mrays[name][kind].push_back(double(set.size()) / s * 1e-6);
+                    }
+                }
+            }
+            nlohmann::json entry = {{"input", input}, {"primitives", g.primitiveCount()},
+                                    {"rays", {{"primary", rays.primary.size()}, {"diffuse", rays.diffuse.size()}, {"shadow", rays.shadow.size()}}},
+                                    {"structures", nlohmann::json::object()}};
+            if (!opt->json)
+                std::cout << input << ": " << g.primitiveCount() << " primitives; rays primary " << rays.primary.size()
+                          << ", diffuse " << rays.diffuse.size() << ", shadow " << rays.shadow.size() << "\n";
+            bool haveEmbree = mrays.count("embree") > 0;
+            for (const std::string& name : accels) {
+                nlohmann::json s = {{"buildSeconds", median(buildSeconds[name])},
+                                    {"bytesPerPrimitive", g.primitiveCount() ? double(stats[name].memoryBytes) / double(g.primitiveCount()) : 0.0}};
+                std::ostringstream line;
+                line << std::fixed << std::setprecision(3) << "  " << std::setw(8) << std::left << name << " build "
+                     << median(buildSeconds[name]) << " s";
+                if (haveEmbree) line << " (" << median(buildSeconds[name]) / median(buildSeconds["embree"]) << "x embree)";
+                line << std::setprecision(1) << ", " << s["bytesPerPrimitive"].get<double>() << " B/prim";
+                for (const std::string& kind : kinds) {
+                    double m = median(mrays[name][kind]);
+                    s["mraysPerSecond"][kind] = m;
+                    line << std::setprecision(2) << ", " << kind << " " << m << " Mrays/s";
+                    if (haveEmbree) {
+                        double ratio = m / median(mrays["embree"][kind]);
+                        s["ratioToEmbree"][kind] = ratio;
+                        line << " (" << ratio << "x)";
+                    }
+                }
+                entry["structures"][name] = s;
+                if (!opt->json) std::cout << line.str() << "\n";
+            }
+            entry["checksum"] = checksum;
+            report["inputs"].push_back(entry);
+            for (const std::string& w : warnings) printWarning(w);
+        }
+        if (opt->json) std::cout << report.dump(2) << std::endl;
+        return 0;
+    };
+}
+
+}  // namespace tessera::app

@@ -1,0 +1,82 @@
+/// \file validate_accel_command.cpp
+/// `tessera validate-accel INPUT`: casts the same rays through an acceleration structure and through
+/// Embree and reports agreements, admissible ties and errors. Exit code 1 when there is an error.
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <iostream>
+
+#include "accel/validate.h"
+#include "app/commands.h"
+#include "scene/mesh_loader.h"
+
+namespace tessera::app {
+
+Runner addValidateAccelCommand(CLI::App& app) {
+    struct Options {
+        std::string input, accel = "bvh", kind = "all";
+        size_t rays = 1000000;
+        uint64_t seed = 1;
+        bool json = false;
+    };
+    auto opt = std::make_shared<Options>();
+    CLI::App* cmd = app.add_subcommand("validate-accel", "Compare an acceleration structure with Embree, ray by ray");
+    cmd->add_option("INPUT", opt->input, "glTF scene, PLY (also .ply.gz) or OBJ mesh")->required();
+    cmd->add_option("--accel", opt->accel, "structure to check")->capture_default_str();
+    cmd->add_option("--rays", opt->rays, "number of rays (split evenly over the kinds with --kind all)")->capture_default_str();
+    cmd->add_option("--kind", opt->kind, "primary, random, diffuse, grazing or all")->capture_default_str();
+    cmd->add_option("--seed", opt->seed, "seed of the ray generator")->capture_default_str();
+    cmd->add_flag("--json", opt->json, "print one JSON object instead of text");
+    cmd->footer("Same primitive: t within 1e-5 relative, u, v within 1e-4, normals within 1e-4 (cosine).\n"
+                "A tie is a ray whose answers differ admissibly (confirmed in double precision): two primitives\n"
+                "hit at the same t (shared edge, duplicates), or a ray grazing an edge or a silhouette.");
+    return [opt] {
+        std::vector<std::string> warnings;
+        std::optional<CameraDesc> camera;
+        SceneGeometry geometry = loadGeometryFile(opt->input, camera, warnings);
+        std::vector<RayKind> kinds;
+        if (opt->kind == "all") kinds.assign(std::begin(kAllRayKinds), std::end(kAllRayKinds));
+        else kinds.push_back(parseRayKind(opt->kind));
+
+        auto test = createAccel(opt->accel, geometry);
+        auto reference = createAccel("embree", geometry);
+        ValidationResult total;
+        nlohmann::json perKind = nlohmann::json::object();
+        auto start = std::chrono::steady_clock::now();
+        for (size_t k = 0; k < kinds.size(); ++k) {
+            size_t n = opt->rays / kinds.size() + (k < opt->rays % kinds.size() ? 1 : 0);
+            std::vector<Ray> rays = generateRays(geometry, *reference, kinds[k], n, opt->seed, camera);
+            ValidationResult r = compareAccels(*test, *reference, geometry, rays, kinds[k]);
+            perKind[std::string(toString(kinds[k]))] = {{"rays", r.rays}, {"agreements", r.agreements}, {"ties", r.ties}, {"errors", r.errors}};
+            total.merge(r, 20);
+        }
+        double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (opt->json) {
+            nlohmann::json j = toJson(total);
+            j["input"] = opt->input;
+            j["accel"] = opt->accel;
+            j["reference"] = "embree";
+            j["primitives"] = geometry.primitiveCount();
+            j["seed"] = opt->seed;
+            j["kinds"] = perKind;
+            j["seconds"] = seconds;
+            std::cout << j.dump(2) << std::endl;
+        } else {
+            std::cout << opt->accel << " vs embree on " << opt->input << " (" << geometry.primitiveCount()
+                      << " primitives, seed " << opt->seed << ")\n";
+            for (auto& [name, v] : perKind.items())
+                std::cout << "  " << name << ": " << v["rays"] << " rays, " << v["agreements"] << " agree, " << v["ties"]
+                          << " ties, " << v["errors"] << " errors\n";
+            std::cout << "total: " << total.rays << " rays, " << total.agreements << " agree, " << total.ties
+                      << " ties, " << total.errors << " errors (" << seconds << " s)\n";
+            for (const ValidationExample& e : total.examples)
+                std::cout << "  error [" << toString(e.kind) << " #" << e.rayIndex << "] " << e.reason << ": ray "
+                          << toJson(e.ray).dump() << " test " << toJson(e.test, e.testHit).dump() << " reference "
+                          << toJson(e.ref, e.refHit).dump() << "\n";
+        }
+        for (const std::string& w : warnings) printWarning(w);
+        return total.errors > 0 ? 1 : 0;
+    };
+}
+
+}  // namespace tessera::app

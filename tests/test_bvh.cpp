@@ -1,0 +1,298 @@
+// Our BVH against Embree, ray by ray, on the scenes that break acceleration structures (Embree's
+// verify.cpp, notes-accel.md "Pathologies"): zero errors for every ray kind, plus tree invariants,
+// determinism across thread counts, degenerate rays, and a check that the validator sees real errors.
+#include <gtest/gtest.h>
+
+#include <tbb/task_arena.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "accel/bvh_accel.h"
+#include "accel/validate.h"
+#include "core/rng.h"
+#include "scene/gltf_loader.h"
+#include "scene/mesh_loader.h"
+#include "test_helpers.h"
+
+using namespace tessera;
+
+namespace {
+
+/// TESSERA_ASSETS, or <source>/../shared/data when it exists; empty when neither does.
+std::string assetsDir() {
+    if (const char* env = std::getenv("TESSERA_ASSETS")) return env;
+    std::filesystem::path p = std::filesystem::path(TESSERA_SOURCE_DIR) / ".." / "shared" / "data";
+    return std::filesystem::exists(p) ? p.string() : std::string();
+}
+
+TriangleMesh meshFrom(std::vector<Vec3f> positions, std::vector<glm::uvec3> triangles) {
+    TriangleMesh m;
+    m.name = "procedural";
+    m.positions = std::move(positions);
+    m.triangles = std::move(triangles);
+    return m;
+}
+
+void addTriangle(TriangleMesh& m, Vec3f a, Vec3f b, Vec3f c) {
+    uint32_t i = uint32_t(m.positions.size());
+    m.positions.insert(m.positions.end(), {a, b, c});
+    m.triangles.emplace_back(i, i + 1, i + 2);
+}
+
+/// Builds the BVH, checks its invariants and compares it with Embree for every ray kind.
+void expectMatchesEmbree(const SceneGeometry& g, size_t raysPerKind, const std::string& what, const BvhConfig& config = {}) {
+    BvhAccel bvh(g, AccelOptions{}, config);
+    EXPECT_EQ(bvh.checkInvariants(), "") << what;
+    auto embree = createAccel("embree", g);
+    auto brute = createAccel("brute", g);
+    for (RayKind kind : kAllRayKinds) {
+        std::vector<Ray> rays = generateRays(g, *embree, kind, raysPerKind, /*seed=*/7);
+        if (g.primitiveCount() <= 5000) {
+            // The same watertight test in both: answers may differ only where either is admissible
+            // (duplicates, shared edges), never otherwise.
+            ValidationResult vsBrute = compareAccels(bvh, *brute, g, rays, kind);
+            EXPECT_EQ(vsBrute.errors, 0u) << what << ", " << toString(kind) << " rays vs brute force: " << toJson(vsBrute).dump();
+        }
+        ValidationResult r = compareAccels(bvh, *embree, g, rays, kind);
+        EXPECT_EQ(r.rays, rays.size());
+        EXPECT_EQ(r.errors, 0u) << what << ", " << toString(kind) << " rays: "
+                                << (r.examples.empty() ? std::string() : toJson(r).dump());
+    }
+}
+
+SceneGeometry coplanarGrid() {
+    TriangleMesh m;
+    const int n = 40;
+    for (int y = 0; y <= n; ++y)
+        for (int x = 0; x <= n; ++x) m.positions.push_back(Vec3f(float(x), float(y), 0.f) / float(n));
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            uint32_t i = uint32_t(y * (n + 1) + x);
+            m.triangles.emplace_back(i, i + 1, i + n + 2);
+            m.triangles.emplace_back(i, i + n + 2, i + n + 1);
+        }
+    SceneGeometry g;
+    g.meshes.push_back(m);
+    return g;
+}
+
+}  // namespace
+
+TEST(Bvh, MatchesEmbreeOnCoplanarGrid) { expectMatchesEmbree(coplanarGrid(), 3000, "coplanar grid"); }
+
+TEST(Bvh, MatchesEmbreeOnDuplicatedTriangles) {
+    SceneGeometry g;
+    TriangleMesh m = test::makeUvSphereMesh(Vec3f(0), 1.f, 10, 20, 0);
+    size_t n = m.triangles.size();
+    for (size_t i = 0; i < n; ++i) m.triangles.push_back(m.triangles[i]);  // every triangle twice
+    g.meshes.push_back(m);
+    g.meshes.push_back(m);  // and the whole mesh again as another geometry
+    expectMatchesEmbree(g, 3000, "duplicated triangles");
+}
+
+TEST(Bvh, MatchesEmbreeOnLongSlivers) {
+    TriangleMesh m;
+    Pcg32 rng(3, 0);
+    for (int i = 0; i < 400; ++i) {
+        Vec3f a(rng.nextFloat(), rng.nextFloat(), rng.nextFloat());
+        Vec3f dir = glm::normalize(Vec3f(rng.nextFloat(), rng.nextFloat(), rng.nextFloat()) - 0.5f);
+        addTriangle(m, a - 5.f * dir, a + 5.f * dir, a + Vec3f(1e-4f, 2e-4f, -1e-4f));
+    }
+    SceneGeometry g;
+    g.meshes.push_back(m);
+    expectMatchesEmbree(g, 3000, "long slivers");
+}
+
+TEST(Bvh, MatchesEmbreeWithSceneSpanningTriangles) {
+    SceneGeometry g;
+    g.meshes.push_back(test::makeUvSphereMesh(Vec3f(0), 0.3f, 12, 24, 0));
+    TriangleMesh big;
+    addTriangle(big, Vec3f(-100, -1, -100), Vec3f(100, -1, -100), Vec3f(0, -1, 100));
+    addTriangle(big, Vec3f(-100, -100, 2), Vec3f(100, 50, 2), Vec3f(0, 100, 2.5f));
+    addTriangle(big, Vec3f(-3, -100, -100), Vec3f(-3, 100, -100), Vec3f(-3, 0, 100));
+    g.meshes.push_back(big);
+    expectMatchesEmbree(g, 3000, "scene-spanning triangles");
+}
+
+TEST(Bvh, MatchesEmbreeWithTrianglesOnSplitPlanes) {
+    // Axis-aligned triangles lying exactly on the planes a 32-bin (and 16-bin) builder considers:
+    // the centroid bounds are [0, 1] on every axis, so planes sit at multiples of 1/32.
+    TriangleMesh m;
+    for (int axis = 0; axis < 3; ++axis)
+        for (int k = 0; k <= 32; ++k) {
+            float c = float(k) / 32.f;
+            Vec3f a(0.f), b(0.f), d(0.f);
+            int u = (axis + 1) % 3, v = (axis + 2) % 3;
+            a[axis] = b[axis] = d[axis] = c;
+            a[u] = 0.1f, a[v] = 0.1f;
+            b[u] = 0.9f, b[v] = 0.1f;
+            d[u] = 0.5f, d[v] = 0.9f;
+            addTriangle(m, a, b, d);
+        }
+    SceneGeometry g;
+    g.meshes.push_back(m);
+    expectMatchesEmbree(g, 3000, "split planes");
+    BvhConfig bins16;
+    bins16.binCount = 16;
+    expectMatchesEmbree(g, 1000, "split planes, 16 bins", bins16);
+}
+
+TEST(Bvh, MatchesEmbreeOnTinyTriangles) {
+    TriangleMesh m;
+    Pcg32 rng(5, 0);
+    for (int i = 0; i < 2000; ++i) {
+        Vec3f a(rng.nextFloat(), rng.nextFloat(), rng.nextFloat());
+        addTriangle(m, a, a + Vec3f(1e-6f, 0, 0), a + Vec3f(0, 1e-6f, 1e-6f));
+    }
+    SceneGeometry g;
+    g.meshes.push_back(m);
+    expectMatchesEmbree(g, 3000, "tiny triangles");
+}
+
+TEST(Bvh, MatchesEmbreeOnASingleTriangleAndAnEmptyScene) {
+    SceneGeometry one;
+    one.meshes.push_back(meshFrom({Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0)}, {glm::uvec3(0, 1, 2)}));
+    expectMatchesEmbree(one, 3000, "single triangle");
+    SceneGeometry empty;
+    expectMatchesEmbree(empty, 500, "empty scene");
+    SceneGeometry emptyMesh;
+    emptyMesh.meshes.emplace_back();
+    expectMatchesEmbree(emptyMesh, 500, "empty mesh");
+}
+
+TEST(Bvh, MatchesEmbreeOnSpheresIncludingRadius1e4Walls) {
+    std::vector<std::string> warnings;
+    Scene scene = loadGltfScene(test::sourcePath("scenes/sphere-cornell/sphere-cornell.gltf"), warnings);
+    expectMatchesEmbree(scene.geometry, 3000, "sphere Cornell box");
+    // Spheres and triangles mixed in one leaf range.
+    SceneGeometry mixed;
+    mixed.meshes.push_back(test::makeUvSphereMesh(Vec3f(0), 1.f, 8, 16, 0));
+    for (int i = 0; i < 30; ++i) mixed.spheres.push_back(Sphere{"s", Vec3f(float(i % 5) - 2.f, float(i / 5) * 0.4f - 1.f, 0.2f), 0.15f, 0});
+    expectMatchesEmbree(mixed, 3000, "spheres and triangles");
+}
+
+TEST(Bvh, MatchesEmbreeOnTheBunny) {
+    std::string dir = assetsDir();
+    std::string path = dir + "/stanford-bunny/bun_zipper.ply";
+    if (dir.empty() || !std::filesystem::exists(path))
+        GTEST_SKIP() << "Stanford bunny not found (set TESSERA_ASSETS to the folder holding stanford-bunny/)";
+    SceneGeometry g;
+    g.meshes.push_back(loadPlyMesh(path));
+    EXPECT_EQ(g.meshes[0].triangles.size(), 69451u);
+    expectMatchesEmbree(g, 25000, "bunny");
+}
+
+TEST(Bvh, ConfigVariantsStayCorrect) {
+    SceneGeometry g;
+    g.meshes.push_back(test::makeUvSphereMesh(Vec3f(0), 1.f, 16, 32, 0));
+    BvhConfig leaf1;
+    leaf1.maxLeafSize = 1;
+    leaf1.sahBlockSize = 1;
+    expectMatchesEmbree(g, 1000, "leaf size 1", leaf1);
+    BvhConfig leaf15;
+    leaf15.maxLeafSize = 15;
+    leaf15.intersectionCost = 0.1f;
+    expectMatchesEmbree(g, 1000, "leaf size 15", leaf15);
+    BvhConfig median;
+    median.maxSahDepth = 0;  // object medians only
+    median.binCount = 2;
+    expectMatchesEmbree(g, 1000, "median splits", median);
+}
+
+TEST(Bvh, BuildIsIdenticalForAnyThreadCount) {
+    SceneGeometry g;
+    g.meshes.push_back(test::makeUvSphereMesh(Vec3f(0), 1.f, 120, 240, 0));  // ~57k triangles: parallel paths run
+    BvhConfig config;
+    config.parallelThreshold = 256;
+    BvhAccel one(g, AccelOptions{1}, config);
+    BvhAccel two(g, AccelOptions{2}, config);
+    BvhAccel many(g, AccelOptions{8}, config);
+    EXPECT_EQ(one.structureHash(), two.structureHash());
+    EXPECT_EQ(one.structureHash(), many.structureHash());
+    EXPECT_EQ(one.checkInvariants(), "");
+}
+
+TEST(Bvh, DegenerateRaysAndClippedRanges) {
+    SceneGeometry g;
+    g.meshes.push_back(test::makeUvSphereMesh(Vec3f(0), 1.f, 8, 16, 0));
+    BvhAccel bvh(g, AccelOptions{});
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = kInfinity;
+    for (const Ray& r : {Ray{Vec3f(0, 0, -5), Vec3f(0)}, Ray{Vec3f(nan, 0, -5), Vec3f(0, 0, 1)},
+                         Ray{Vec3f(0, 0, -5), Vec3f(0, 0, -inf)}, Ray{Vec3f(-inf, 0, -5), Vec3f(0, 0, 1)},
+                         Ray{Vec3f(0, 0, -5), Vec3f(0, 0, 1), nan, 10.f}}) {
+        Hit h;
+        EXPECT_FALSE(bvh.intersect(r, h));
+        EXPECT_FALSE(bvh.occluded(r));
+    }
+    // Every signed-zero combination of an axis-aligned ray through the centre hits at t = 4.
+    for (int signs = 0; signs < 8; ++signs) {
+        Vec3f d((signs & 1) ? -0.f : 0.f, (signs & 2) ? -0.f : 0.f, (signs & 4) ? -1.f : 1.f);
+        Ray r{Vec3f(0, 0, (signs & 4) ? 5.f : -5.f), d};
+        Hit h;
+        ASSERT_TRUE(bvh.intersect(r, h)) << signs;
+        EXPECT_NEAR(h.t, 4.f, 1e-3f);
+        EXPECT_TRUE(bvh.occluded(r));
+    }
+    // tMin past the near side: the far side of the sphere; tMax before the sphere: nothing.
+    Hit h;
+    ASSERT_TRUE(bvh.intersect(Ray{Vec3f(0, 0, -5), Vec3f(0, 0, 1), 5.f, kInfinity}, h));
+    EXPECT_NEAR(h.t, 6.f, 1e-3f);
+    EXPECT_FALSE(bvh.intersect(Ray{Vec3f(0, 0, -5), Vec3f(0, 0, 1), 0.f, 3.9f}, h));
+    EXPECT_FALSE(bvh.occluded(Ray{Vec3f(0, 0, -5), Vec3f(0, 0, 1), 6.1f, kInfinity}));
+}
+
+namespace {
+/// Embree with one primitive removed: the validator must report errors, not ties.
+class AccelWithAHole final : public Accel {
+public:
+    AccelWithAHole(const SceneGeometry& g) : inner_(createAccel("brute", g)), geometry_(g) {
+        hole_ = g;
+        hole_.meshes[0].triangles[hole_.meshes[0].triangles.size() / 2] = glm::uvec3(0, 0, 0);
+        holed_ = createAccel("brute", hole_);
+    }
+    std::string_view name() const override { return "holed"; }
+    bool intersect(const Ray& r, Hit& h) const override { return holed_->intersect(r, h); }
+    bool occluded(const Ray& r) const override { return holed_->occluded(r); }
+    Bounds3f bounds() const override { return inner_->bounds(); }
+    AccelStats stats() const override { return {}; }
+
+private:
+    std::unique_ptr<Accel> inner_, holed_;
+    const SceneGeometry& geometry_;
+    SceneGeometry hole_;
+};
+}  // namespace
+
+TEST(Bvh, ValidatorReportsAMissingTriangleAsErrors) {
+    SceneGeometry g;
+    g.meshes.push_back(test::makeUvSphereMesh(Vec3f(0), 1.f, 4, 8, 0));
+    AccelWithAHole broken(g);
+    auto embree = createAccel("embree", g);
+    std::vector<Ray> rays = generateRays(g, *embree, RayKind::Random, 4000, 1);
+    ValidationResult r = compareAccels(broken, *embree, g, rays, RayKind::Random);
+    EXPECT_GT(r.errors, 0u);
+    EXPECT_FALSE(r.examples.empty());
+    EXPECT_LE(r.examples.size(), 20u);
+}
+
+TEST(Bvh, MeshLoadersReadPlyAndObj) {
+    auto dir = test::tempDir("mesh-loaders");
+    std::string ply = (dir / "quad.ply").string(), obj = (dir / "quad.obj").string();
+    {
+        std::ofstream f(ply);
+        f << "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+             "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+    }
+    {
+        std::ofstream f(obj);
+        f << "# quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1 -1/1\n";
+    }
+    TriangleMesh a = loadPlyMesh(ply), b = loadObjMesh(obj);
+    EXPECT_EQ(a.positions.size(), 4u);
+    ASSERT_EQ(a.triangles.size(), 2u);
+    ASSERT_EQ(b.triangles.size(), 2u);
+    EXPECT_EQ(a.triangles[1], glm::uvec3(0, 2, 3));
+    EXPECT_EQ(b.triangles[1], glm::uvec3(0, 2, 3));
+}
