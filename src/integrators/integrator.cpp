@@ -1,17 +1,24 @@
 #include "integrators/integrator.h"
 
 #include "core/error.h"
+#include "integrators/bdpt.h"
+#include "integrators/bsdf_path_tracer.h"
+#include "integrators/light_tracer.h"
 #include "integrators/path_tracer.h"
 
 namespace tessera {
 
-std::vector<std::string> integratorNames() { return {"ptnee"}; }
+std::vector<std::string> integratorNames() { return {"pt", "ptnee", "lt", "bdpt"}; }
 
 std::unique_ptr<Integrator> createIntegrator(std::string_view name) {
+    if (name == "pt") return std::make_unique<BsdfPathTracer>();
     if (name == "ptnee") return std::make_unique<PathTracer>();
+    if (name == "lt") return std::make_unique<LightTracer>();
+    if (name == "bdpt") return std::make_unique<BdptIntegrator>();
+    if (name == "bdpt-balance") return std::make_unique<BdptIntegrator>(BdptSettings{MisHeuristic::Balance});
     std::string known;
     for (const std::string& n : integratorNames()) known += (known.empty() ? "" : ", ") + n;
-    throw InputError("unknown integrator '" + std::string(name) + "' (known: " + known + ")");
+    throw InputError("unknown integrator '" + std::string(name) + "' (known: " + known + ", bdpt-balance)");
 }
 
 }  // namespace tessera
