@@ -83,11 +83,10 @@ namespace {
 
 /// Extends a sub-path whose last vertex is `out.back()` along `ray` (Veach 1997, §10.2: each
 /// vertex sampled from its predecessor with the local density, converted to area). `beta` is the
-/// throughput carried by the ray and `pdfDirW` the solid-angle density of its direction.
-void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, float pdfDirW, Sampler& sampler, TransportMode mode,
+/// throughput carried by the ray.
+void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, TransportMode mode,
                 int maxVertices, std::vector<PathVertex>& out) {
     const Scene& scene = ctx.scene;
-    float pdfFwdW = pdfDirW;
     float rrScale = 1.f;  // product of BSDF weights (and η² for radiance): what Russian roulette looks at
     int limit = maxVertices < 0 ? kMaxSubpathVertices : std::min(maxVertices, kMaxSubpathVertices);
     while (int(out.size()) < limit) {
@@ -103,29 +102,28 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, float pdfDirW, Samp
         v.beta = beta;
         v.materialId = si.materialId;
         v.lightIndex = si.lightIndex;
-        PathVertex& prev = out.back();
-        v.pdfFwdA = convertDensity(pdfFwdW, prev, v);
+        // Densities are evaluated from the vertex positions rather than taken from the sampling
+        // routine: the connection code evaluates them the same way, so every strategy sees exactly
+        // the same p→/p← for a vertex and the weights sum to one to rounding (grazing cosine-
+        // hemisphere samples otherwise differ by a few percent). Delta densities stay 0.
+        const size_t n = out.size();
+        const PathVertex& prev = out[n - 1];
+        v.pdfFwdA = prev.delta ? 0.f : pdfNextA(ctx, n >= 2 ? &out[n - 2] : nullptr, prev, v);
+        // The successor now exists: the density of the predecessor's predecessor being sampled
+        // from `prev` given `v` (Veach's p←), i.e. pdfRevA of out[n − 2].
+        if (n >= 2) out[n - 2].pdfRevA = prev.delta ? 0.f : pdfNextA(ctx, &v, prev, out[n - 2]);
         out.push_back(v);
         if (int(out.size()) >= limit) break;
 
         PathVertex& cur = out.back();
-        PathVertex& before = out[out.size() - 2];
         SurfaceBsdf bsdf(scene.materials[cur.materialId], cur.ns, cur.ng);
         SurfaceBsdfSample bs;
         float uLobe = sampler.get1D();
         Vec2f uDir = sampler.get2D();
         if (!bsdf.sample(cur.woWorld, uLobe, uDir, mode, bs)) break;
-        float pdfRevW = bs.pdfRevW;
-        pdfFwdW = bs.pdfFwdW;
-        if (bs.isDelta) {
-            // Delta densities are stored as 0 and remapped to 1 by the MIS code.
-            cur.delta = true;
-            pdfFwdW = pdfRevW = 0.f;
-        }
+        cur.delta = bs.isDelta;
         beta *= bs.weight;
         rrScale *= maxComponent(bs.weight) * (mode == TransportMode::Radiance ? bs.eta * bs.eta : 1.f);
-        // The density with which the successor would have sampled `before` (Veach's p←).
-        before.pdfRevA = convertDensity(pdfRevW, cur, before);
         if (isBlack(beta)) break;
         // Russian roulette (Arvo & Kirk 1990) from the third vertex on: survive with q = min(1,
         // rrScale) and divide by q, so every estimator stays unbiased. MIS weights do not include q:
@@ -153,9 +151,9 @@ void traceCameraSubpath(const RenderContext& ctx, Vec2f raster, Sampler& sampler
     z0.beta = Rgb(1.f);
     float pdfPosA, pdfDirW;
     ctx.camera.pdfEmission(ray.d, pdfPosA, pdfDirW);
-    z0.pdfFwdA = pdfPosA;
+    z0.pdfFwdA = pdfPosA;  // never used by the weights (no strategy hits the lens)
     out.push_back(z0);
-    randomWalk(ctx, ray, Rgb(1.f), pdfDirW, sampler, TransportMode::Radiance, maxVertices, out);
+    randomWalk(ctx, ray, Rgb(1.f), sampler, TransportMode::Radiance, maxVertices, out);
 }
 
 void traceLightSubpath(const RenderContext& ctx, Sampler& sampler, int maxVertices, std::vector<PathVertex>& out) {
@@ -179,7 +177,7 @@ void traceLightSubpath(const RenderContext& ctx, Sampler& sampler, int maxVertic
     float cosLight = le.isDeltaPos ? 1.f : std::abs(glm::dot(le.n, le.dir));
     Rgb beta = le.Le * (cosLight / (le.pdfPosA * le.pdfDirW));
     Ray ray = le.isDeltaPos ? Ray{le.p, le.dir, 0.f, kInfinity} : spawnRay(le.p, le.n, le.dir);
-    randomWalk(ctx, ray, beta, le.pdfDirW, sampler, TransportMode::Importance, maxVertices, out);
+    randomWalk(ctx, ray, beta, sampler, TransportMode::Importance, maxVertices, out);
 }
 
 }  // namespace tessera
