@@ -192,3 +192,48 @@ TEST(IntegratorAgreement, PerPixelZTestOnTheCornellBox) {
         EXPECT_GT(minP, alphaPerTest) << name << " vs ptnee: worst pixel " << worst / 3 << " channel " << worst % 3 << ": " << worstInfo;
     }
 }
+
+// pbrt-style strategy images: re-rendering with the same seed while keeping one strategy (s, t)
+// consumes the same random numbers, so the weighted images must sum to the full bdpt image.
+TEST(BdptStrategies, WeightedStrategyImagesSumToTheBdptImage) {
+    std::vector<std::string> warnings;
+    Scene scene = loadGltfScene(test::sourcePath("scenes/cornell-box/cornell-box.gltf"), warnings);
+    const int w = 24, h = 24, spp = 4, maxDepth = 2;
+    Film full = renderWith(scene, "bdpt", w, h, spp, 3, 0, nullptr, maxDepth);
+    std::vector<double> sum(size_t(w * h * 3), 0.0);
+    int strategies = 0;
+    for (int n = 2; n <= maxDepth + 2; ++n)
+        for (int t = 1; t <= n; ++t) {
+            BdptSettings bs;
+            bs.onlyS = n - t;
+            bs.onlyT = t;
+            BdptIntegrator one(bs);
+            Film film = renderWith(scene, "bdpt", w, h, spp, 3, 0, &one, maxDepth);
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x)
+                    for (int c = 0; c < 3; ++c) sum[size_t((y * w + x) * 3 + c)] += film.pixel(x, y)[c];
+            ++strategies;
+        }
+    EXPECT_EQ(strategies, 2 + 3 + 4);
+    double total = 0.0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) {
+                double a = full.pixel(x, y)[c], b = sum[size_t((y * w + x) * 3 + c)];
+                EXPECT_NEAR(a, b, 1e-5 * std::max(1.0, a)) << "pixel " << x << "," << y << " channel " << c;
+                total += a;
+            }
+    EXPECT_GT(total, 0.0);
+}
+
+TEST(IntegratorScenes, EveryIntegratorRendersTheProjectScenesWithoutNaN) {
+    for (const char* file : {"scenes/cornell-box/cornell-box.gltf", "scenes/sphere-cornell/sphere-cornell.gltf",
+                             "scenes/sphere-cornell/sphere-cornell-mirror.gltf", "scenes/sphere-cornell/sphere-cornell-glass.gltf"}) {
+        std::vector<std::string> warnings;
+        Scene scene = loadGltfScene(test::sourcePath(file), warnings);
+        for (const char* name : kIntegrators) {
+            Film film = renderWith(scene, name, 32, 24, 4, 11);  // expects no dropped non-finite samples
+            for (float v : film.rgba()) ASSERT_TRUE(std::isfinite(v)) << file << " " << name;
+        }
+    }
+}
