@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <fstream>
 
 #include "integrators/bdpt.h"
 #include "integrators/integrator.h"
@@ -33,7 +34,8 @@ void pixelMean(const Film& film, double mean[3], double se[3]) {
 }
 
 /// A closed sphere (radius R = 1) seen from inside, camera at the origin looking down −z.
-Scene closedSphere(Rgb albedo, Rgb Le, bool asMesh, const std::vector<PointLightDesc>& pointLights = {}) {
+Scene closedSphere(Rgb albedo, Rgb Le, bool asMesh, const std::vector<PointLightDesc>& pointLights = {},
+                   float apertureRadius = 0.f) {
     Scene scene;
     Material m;
     m.albedo = albedo;
@@ -47,6 +49,8 @@ Scene closedSphere(Rgb albedo, Rgb Le, bool asMesh, const std::vector<PointLight
     scene.finalize();
     scene.camera = CameraDesc{};
     scene.camera->yfov = 1.2f;
+    scene.camera->apertureRadius = apertureRadius;
+    scene.camera->focusDistance = 0.6f;
     return scene;
 }
 
@@ -236,4 +240,64 @@ TEST(IntegratorScenes, EveryIntegratorRendersTheProjectScenesWithoutNaN) {
             for (float v : film.rgba()) ASSERT_TRUE(std::isfinite(v)) << file << " " << name;
         }
     }
+}
+
+// The thin-lens camera's importance (camera.h) must integrate to the same pixel normalisation as its
+// ray generation: light tracing and BDPT through a lens of radius 0.1 still see Le / (1 − a).
+TEST(IntegratorFurnace, ThinLensCameraInTheFurnace) {
+    Rgb albedo(0.5f), Le(1.f);
+    Scene scene = closedSphere(albedo, Le, false, {}, /* apertureRadius = */ 0.1f);
+    for (const char* name : {"lt", "bdpt", "ptnee"}) {
+        Film film = renderWith(scene, name, 32, 32, std::string(name) == "lt" ? 256 : 24, 21);
+        expectImageMean(film, Le / (Rgb(1.f) - albedo), name, 0.01);
+    }
+}
+
+// Shading normals (pbrt-v3 #73/#87): on a coarse sphere mesh with radial vertex normals the
+// shading normal differs from the facet normal by up to 15°. The answer is no longer Le / (1 − a),
+// but radiance (ptnee) and importance (lt, bdpt's light sub-paths) transport must agree, which
+// needs the adjoint BSDF's correction |wo·ns||wi·ng| / (|wo·ng||wi·ns|) on light sub-paths.
+TEST(IntegratorAgreement, ShadingNormalsDoNotSplitRadianceAndImportanceTransport) {
+    Scene scene;
+    Material m;
+    m.albedo = Rgb(0.6f);
+    m.emission = Rgb(1.f);
+    m.doubleSided = true;
+    scene.materials.push_back(m);
+    Vec3f center(0.1f, -0.2f, 0.05f);
+    TriangleMesh mesh = test::makeUvSphereMesh(center, 1.f, 6, 12, 0);
+    for (const Vec3f& p : mesh.positions) mesh.normals.push_back(glm::normalize(p - center));
+    scene.geometry.meshes.push_back(mesh);
+    scene.finalize();
+    scene.camera = CameraDesc{};
+    scene.camera->yfov = 1.2f;
+    double ref[3], refSe[3];
+    pixelMean(renderWith(scene, "ptnee", 32, 32, 256, 8), ref, refSe);
+    for (const char* name : {"lt", "bdpt"}) {
+        double mean[3], se[3];
+        pixelMean(renderWith(scene, name, 32, 32, std::string(name) == "lt" ? 512 : 64, 9), mean, se);
+        EXPECT_LT(std::abs(mean[0] - ref[0]), 4.0 * std::hypot(se[0], refSe[0])) << name << " " << mean[0] << " vs ptnee " << ref[0];
+        EXPECT_LT(std::abs(mean[0] - ref[0]), 0.01 * ref[0]) << name << " " << mean[0] << " vs ptnee " << ref[0];
+    }
+}
+
+TEST(PointLights, KhrLightsPunctualPointLightIsLoadedAsRadiantIntensity) {
+    std::string dir = test::tempDir("point-light").string();
+    std::string path = dir + "/point.gltf";
+    std::ofstream(path) << R"({"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_lights_punctual"],
+      "extensions": {"KHR_lights_punctual": {"lights": [
+        {"type": "point", "color": [1.0, 0.5, 0.25], "intensity": 8.0},
+        {"type": "spot", "intensity": 3.0, "spot": {}}]}},
+      "scenes": [{"nodes": [0, 1]}], "scene": 0,
+      "nodes": [{"translation": [1, 2, 3], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                {"extensions": {"KHR_lights_punctual": {"light": 1}}}]})";
+    std::vector<std::string> warnings;
+    Scene scene = loadGltfScene(path, warnings);
+    ASSERT_EQ(scene.pointLights.size(), 1u);
+    EXPECT_EQ(scene.pointLights[0].position, Vec3f(1.f, 2.f, 3.f));
+    EXPECT_EQ(scene.pointLights[0].intensity, Rgb(8.f, 4.f, 2.f));
+    ASSERT_EQ(scene.lights().size(), 1u);
+    EXPECT_TRUE(scene.lights().isDeltaPosition(0));
+    ASSERT_EQ(warnings.size(), 1u);  // the spot light is ignored with a warning
+    EXPECT_NE(warnings[0].find("spot"), std::string::npos);
 }
