@@ -256,3 +256,54 @@ TEST(SamplingChi2, LightEmissionDirectionsFollowPdfDirW) {
         EXPECT_GT(p, sidakLevel());
     }
 }
+
+// Delta BSDFs have no density to histogram: their "χ²" is the discrete lobe choice. The dielectric
+// must reflect with probability F (Fresnel) and refract otherwise, along Snell's direction; the
+// radiance weight of a refraction carries (η_i/η_t)², the importance weight does not (Veach 1997,
+// §5.2; the pbrt bug of applying it to both). The mirror reflects exactly.
+TEST(SamplingChi2, DeltaBsdfsPickLobesByFresnelAndScaleOnlyRadiance) {
+    Material glass = makeMaterial(MaterialType::Dielectric, 0.f);
+    glass.albedo = Rgb(1.f);
+    glass.ior = 1.5f;
+    Material mirror = makeMaterial(MaterialType::Mirror, 0.f);
+    const Vec3f nz(0.f, 0.f, 1.f);
+    const int n = 100000;
+    for (float thetaDeg : {10.f, 60.f, 85.f}) {
+        for (float side : {1.f, -1.f}) {  // arriving from outside, and from inside the glass
+            float th = thetaDeg * kPi / 180.f;
+            Vec3f wo(std::sin(th), 0.f, side * std::cos(th));
+            SurfaceBsdf bsdf(glass, nz, nz);
+            float F = fresnelDielectric(wo.z, glass.ior);
+            float etaT = side > 0.f ? glass.ior : 1.f, etaI = side > 0.f ? 1.f : glass.ior;
+            Pcg32 rng(uint64_t(thetaDeg), side > 0.f ? 1u : 2u);
+            int reflected = 0;
+            for (int i = 0; i < n; ++i) {
+                float uLobe = rng.nextFloat();
+                Vec2f u = rng.next2D();
+                SurfaceBsdfSample r, imp;
+                ASSERT_TRUE(bsdf.sample(wo, uLobe, u, TransportMode::Radiance, r));
+                ASSERT_TRUE(bsdf.sample(wo, uLobe, u, TransportMode::Importance, imp));
+                EXPECT_TRUE(r.isDelta);
+                if (r.wiWorld.z * wo.z > 0.f) {
+                    ++reflected;
+                    EXPECT_NEAR(r.wiWorld.x, -wo.x, 1e-5f);
+                    EXPECT_NEAR(r.wiWorld.z, wo.z, 1e-5f);
+                    EXPECT_NEAR(r.weight.r, 1.f, 1e-5f);
+                } else {
+                    // Snell: η_i sin θ_i = η_t sin θ_t, and the tangential direction flips.
+                    EXPECT_NEAR(etaI * wo.x, -etaT * r.wiWorld.x, 1e-4f);
+                    EXPECT_NEAR(r.weight.r, (etaI / etaT) * (etaI / etaT), 1e-4f);
+                    EXPECT_NEAR(imp.weight.r, 1.f, 1e-5f);
+                }
+            }
+            double e = double(F) * n, sd = std::sqrt(double(n) * F * (1.0 - F));
+            EXPECT_LT(std::abs(reflected - e), 5.0 * sd + 1.0) << "theta " << thetaDeg << " side " << side << " F " << F;
+        }
+        SurfaceBsdf m(mirror, nz, nz);
+        Vec3f wo(std::sin(thetaDeg * kPi / 180.f), 0.f, std::cos(thetaDeg * kPi / 180.f));
+        SurfaceBsdfSample r;
+        ASSERT_TRUE(m.sample(wo, 0.3f, Vec2f(0.2f, 0.7f), TransportMode::Radiance, r));
+        EXPECT_NEAR(glm::length(r.wiWorld - Vec3f(-wo.x, -wo.y, wo.z)), 0.f, 1e-6f);
+        EXPECT_EQ(m.pdfFwdW(wo, r.wiWorld), 0.f);  // delta: no density off the sampling routine
+    }
+}
