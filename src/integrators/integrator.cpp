@@ -8,7 +8,8 @@
 
 namespace tessera {
 
-std::vector<std::string> integratorNames() { return {"pt", "ptnee", "lt", "bdpt"}; }
+/// `bdpt-balance` is bdpt with the balance heuristic (β = 1) instead of the power heuristic.
+std::vector<std::string> integratorNames() { return {"pt", "ptnee", "lt", "bdpt", "bdpt-balance"}; }
 
 std::unique_ptr<Integrator> createIntegrator(std::string_view name) {
     if (name == "pt") return std::make_unique<BsdfPathTracer>();
@@ -18,7 +19,7 @@ std::unique_ptr<Integrator> createIntegrator(std::string_view name) {
     if (name == "bdpt-balance") return std::make_unique<BdptIntegrator>(BdptSettings{MisHeuristic::Balance});
     std::string known;
     for (const std::string& n : integratorNames()) known += (known.empty() ? "" : ", ") + n;
-    throw InputError("unknown integrator '" + std::string(name) + "' (known: " + known + ", bdpt-balance)");
+    throw InputError("unknown integrator '" + std::string(name) + "' (known: " + known + ")");
 }
 
 }  // namespace tessera
