@@ -13,6 +13,7 @@
 #include "app/commands.h"
 #include "core/error.h"
 #include "core/version.h"
+#include "integrators/bdpt.h"
 #include "integrators/integrator.h"
 #include "io/display_transform.h"
 #include "io/image_output.h"
@@ -25,6 +26,7 @@ namespace {
 
 struct RenderArgs {
     std::string scene, output, png, resolution, integrator, accel, lookAt, display = "sRGB", view = "Standard";
+    std::string bdptStrategies;  ///< directory for the per-strategy debug images (empty: none)
     int spp = 0, threads = 0, maxDepth = -2;
     double timeLimit = 0.0, fovDeg = 0.0;
     int64_t seed = -1;
@@ -77,6 +79,38 @@ Mat4f lookAtCamera(const std::string& text) {
 }
 
 std::string stem(const std::string& path) { return std::filesystem::path(path).stem().string(); }
+
+/// `--bdpt-strategies DIR` (pbrt's visualizestrategies): one EXR per strategy (s, t), weighted and
+/// unweighted, for paths of at most maxDepth + 2 vertices (5 when the depth is unlimited). Each image
+/// is a full re-render with the same seed that keeps one strategy, so the weighted images of all
+/// strategies sum to the bdpt image rendered with the same --max-depth.
+void writeBdptStrategyImages(const RenderArgs& a, const RenderSettings& s, const RenderContext& ctx, RenderOptions ro,
+                             const io::Metadata& md) {
+    int maxVertices = s.maxDepth >= 0 ? s.maxDepth + 2 : 5;
+    RenderContext limited = ctx;
+    limited.maxDepth = maxVertices - 2;
+    ro.progress = nullptr;
+    for (int n = 2; n <= maxVertices; ++n)
+        for (int t = 1; t <= n; ++t) {
+            int sLight = n - t;
+            for (bool weighted : {true, false}) {
+                BdptSettings bs;
+                bs.onlyS = sLight;
+                bs.onlyT = t;
+                bs.unweighted = !weighted;
+                BdptIntegrator integrator(bs);
+                Film film(s.width, s.height);
+                renderImage(limited, integrator, film, ro);
+                std::string path = a.bdptStrategies + "/bdpt_s" + std::to_string(sLight) + "_t" + std::to_string(t) +
+                                   (weighted ? "_weighted.exr" : "_unweighted.exr");
+                io::Metadata m = md;
+                m.push_back({"tessera:bdpt_strategy", "s=" + std::to_string(sLight) + " t=" + std::to_string(t)});
+                m.push_back({"tessera:bdpt_weighted", weighted ? "true" : "false"});
+                std::vector<float> rgba = film.rgba();
+                io::writeExr(path, s.width, s.height, rgba.data(), m);
+            }
+        }
+}
 
 int runRender(const RenderArgs& a) {
     std::vector<std::string> warnings;
@@ -171,6 +205,8 @@ int runRender(const RenderArgs& a) {
     io::writeExr(exrPath, s.width, s.height, rgba.data(), md);
     if (display) io::writePng(pngPath, s.width, s.height, rgba.data(), *display, md);
 
+    if (!a.bdptStrategies.empty() && !stats.interrupted) writeBdptStrategyImages(a, s, ctx, ro, md);
+
     double samplesPerSecond = stats.seconds > 0 ? double(stats.samples) / stats.seconds : 0.0;
     std::ostringstream summary;
     summary << stats.sppCompleted << " spp in " << formatDuration(stats.seconds) << " ("
@@ -230,6 +266,9 @@ Runner addRenderCommand(CLI::App& app) {
     cmd->add_option("--accel", a->accel, "acceleration structure: " + joined(accelNames()) + " (default: embree)");
     cmd->add_option("--max-depth", a->maxDepth, "maximum number of bounces, -1 = unlimited (Russian roulette ends paths)")
         ->check(CLI::Range(-1, 1 << 20));
+    cmd->add_option("--bdpt-strategies", a->bdptStrategies,
+                    "also write one EXR per BDPT strategy (s,t), weighted and unweighted, into this directory "
+                    "(paths up to --max-depth + 2 vertices, 5 if unlimited; one extra render per image)");
     cmd->add_option("--look-at", a->lookAt, "camera EX,EY,EZ,TX,TY,TZ[,UX,UY,UZ]: replaces the scene's camera");
     cmd->add_option("--fov", a->fovDeg, "vertical field of view in degrees (with or without --look-at)")->check(CLI::Range(0.001, 179.0));
     cmd->add_option("--display", a->display, "OCIO display for the PNG (default: sRGB)");

@@ -72,7 +72,8 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
                 if (dist > 0.f && glm::dot(wi, si.ng) * woNg > 0.f) {
                     Rgb f = evalBsdf(mat, woL, wiL, TransportMode::Radiance) * std::abs(wiL.z);
                     if (!isBlack(f) && !ctx.accel.occluded(spawnShadowRay(si.p, si.ng, ls.p, ls.n))) {
-                        float w = powerHeuristic(ls.pdfW, pdfBsdfW(mat, woL, wiL));
+                        // A point light cannot be hit by BSDF sampling: light sampling is its only strategy.
+                        float w = ls.isDelta ? 1.f : powerHeuristic(ls.pdfW, pdfBsdfW(mat, woL, wiL));
                         L += beta * f * ls.Le * (w / ls.pdfW);
                     }
                 }

@@ -16,6 +16,16 @@ struct CameraDesc {
     float focusDistance = 1.f;   ///< distance along the view axis that is in focus (thin lens)
 };
 
+/// The camera reached from a scene point (light tracing, BDPT's t = 1 strategy).
+struct CameraSample {
+    Vec3f pLens{0.f};   ///< point on the lens (the eye for a pinhole)
+    Vec3f wiWorld{0.f}; ///< unit direction from the reference point towards pLens
+    float dist = 0.f;   ///< distance from the reference point to pLens
+    float We = 0.f;     ///< importance of the ray pLens → reference point
+    float pdfW = 0.f;   ///< solid-angle density at the reference point of choosing pLens
+    Vec2f raster{0.f};  ///< where the ray lands on the film
+};
+
 class Camera {
 public:
     Camera(const CameraDesc& desc, int width, int height);
@@ -25,6 +35,24 @@ public:
     Ray generateRay(Vec2f raster, Vec2f uLens) const;
     /// Projects a world point to raster coordinates; false if it lies behind the camera or off film.
     bool worldToRaster(const Vec3f& p, Vec2f& raster) const;
+
+    /// Importance We(pLens → pLens + dir) of a unit direction leaving lens point pLens, and its
+    /// raster position. Normalised so that ∫ We cos θ dA dω over lens and film is 1: with A the
+    /// area of the image rectangle at distance 1 along the view axis,
+    ///     We = 1 / (A · lensArea · cos⁴θ)        (pbrt-v3 §16.1.1; Veach 1997, §8.1.2)
+    /// because a ray through raster point r has solid-angle density 1 / (A cos³θ) (uniform on the
+    /// image plane, Jacobian d²/cos θ with d = 1/cos θ) and the lens point 1/lensArea. Zero when the
+    /// direction misses the film. A pinhole counts as lensArea = 1 (a delta in position).
+    float importance(const Vec3f& pLens, const Vec3f& dir, Vec2f* raster = nullptr) const;
+    /// Densities of generateRay: pdfPosA = 1/lensArea (1 for a pinhole), pdfDirW = 1 / (A cos³θ).
+    void pdfEmission(const Vec3f& dir, float& pdfPosA, float& pdfDirW) const;
+    /// Samples a lens point as seen from `ref` (uniform on the lens): pdfW = d² / (cos θ · lensArea).
+    /// False when the point is behind the camera or projects off the film.
+    bool sampleIncoming(const Vec3f& ref, Vec2f uLens, CameraSample& out) const;
+    bool isPinhole() const { return !(desc_.apertureRadius > 0.f); }
+    float lensArea() const { return isPinhole() ? 1.f : kPi * desc_.apertureRadius * desc_.apertureRadius; }
+    /// Area of the image rectangle at distance 1 in front of the eye.
+    float imagePlaneArea() const { return imagePlaneArea_; }
 
     Vec3f position() const { return eye_; }
     Vec3f forward() const { return forward_; }
@@ -38,6 +66,7 @@ private:
     int width_, height_;
     Mat4d viewProj_, invViewProj_;
     Vec3f eye_, forward_, right_, up_;
+    float imagePlaneArea_ = 0.f;
 };
 
 }  // namespace tessera

@@ -297,6 +297,8 @@ private:
         Mat4d world = parent * localTransform(node, el);
         if (node.mesh >= 0) readMesh(node.mesh, world, el);
         if (node.camera >= 0) readCamera(node.camera, world, el);
+        if (auto it = node.extensions.find("KHR_lights_punctual"); it != node.extensions.end())
+            readPunctualLight(it->second, world, el + ".extensions.KHR_lights_punctual");
         if (auto it = node.extensions.find("TESSERA_sphere"); it != node.extensions.end())
             readSphere(it->second, world, el + ".extensions.TESSERA_sphere");
         for (int c : node.children) visitNode(c, world, depth + 1);
@@ -330,6 +332,37 @@ private:
             if (!(d.focusDistance > 0.f)) fail(tel, "focusDistance must be > 0");
         }
         scene_.camera = d;
+    }
+
+    /// KHR_lights_punctual: only "point" lights are modelled. glTF gives the intensity in candela
+    /// (lm/sr) and emission in nits (cd/m²); Tessera reads emissive values as radiance 1:1, so for the
+    /// same scale it reads candela as radiant intensity (W/sr) 1:1: I = intensity · color. `range`
+    /// is ignored (physically based inverse-square falloff, as the extension recommends).
+    void readPunctualLight(const gl::Value& v, const Mat4d& world, const std::string& el) {
+        if (!v.IsObject() || !v.Has("light") || !v.Get("light").IsNumber()) fail(el, "needs a 'light' index");
+        double index = v.Get("light").GetNumberAsDouble();
+        if (!(index >= 0 && index < double(model_.lights.size())) || index != std::floor(index))
+            fail(el, "'light' must index extensions.KHR_lights_punctual.lights[]");
+        const gl::Light& gl = model_.lights[size_t(index)];
+        const std::string lel = idx("KHR_lights_punctual.lights", size_t(index));
+        if (gl.type != "point") {
+            warnings_.push_back(path_ + ": " + lel + ": light type '" + gl.type + "' is not supported and is ignored");
+            return;
+        }
+        if (!(gl.intensity >= 0.0) || !std::isfinite(gl.intensity)) fail(lel, "intensity must be finite and non-negative");
+        Rgb color(1.f);
+        if (!gl.color.empty()) {
+            if (gl.color.size() != 3) fail(lel, "color must have 3 components");
+            for (int c = 0; c < 3; ++c) {
+                if (!(gl.color[size_t(c)] >= 0.0 && gl.color[size_t(c)] <= 1.0)) fail(lel, "color components must be in [0, 1]");
+                color[c] = float(gl.color[size_t(c)]);
+            }
+        }
+        PointLightDesc pl;
+        pl.position = Vec3f(Vec3d(world[3]));
+        pl.intensity = color * float(gl.intensity);
+        if (!isFinite(pl.position)) fail(el, "light position is not finite");
+        if (!isBlack(pl.intensity)) scene_.pointLights.push_back(pl);
     }
 
     void readSphere(const gl::Value& v, const Mat4d& world, const std::string& el) {
@@ -506,7 +539,7 @@ private:
 }  // namespace
 
 std::vector<std::string> supportedGltfExtensions() {
-    return {"KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior",
+    return {"KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior",
             "TESSERA_render", "TESSERA_sphere", "TESSERA_thin_lens"};
 }
 

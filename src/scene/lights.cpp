@@ -11,7 +11,8 @@ namespace {
 constexpr float kSmallConeSin2 = 0.00068523f;
 }
 
-void LightSet::build(const SceneGeometry& geometry, const std::vector<Material>& materials) {
+void LightSet::build(const SceneGeometry& geometry, const std::vector<Material>& materials,
+                     const std::vector<PointLightDesc>& pointLights) {
     geometry_ = &geometry;
     lights_.clear();
     meshFirstLight_.assign(geometry.meshes.size(), kInvalidId);
@@ -42,6 +43,14 @@ void LightSet::build(const SceneGeometry& geometry, const std::vector<Material>&
         lights_.push_back(Light{LightType::Sphere, geometry.sphereGeomId(), i, mat.emission, mat.doubleSided, area});
         power.push_back(luminance(mat.emission) * area * kPi * (mat.doubleSided ? 2.f : 1.f));
     }
+    for (const PointLightDesc& pl : pointLights) {
+        Light l;
+        l.type = LightType::Point;
+        l.Le = pl.intensity;
+        l.position = pl.position;
+        lights_.push_back(l);
+        power.push_back(luminance(pl.intensity) * 4.f * kPi);  // Φ = 4π I for an isotropic point source
+    }
     double total = 0.0;
     for (float p : power) total += std::max(0.f, p);
     pmf_.assign(lights_.size(), 0.f);
@@ -70,17 +79,101 @@ Rgb LightSet::emitted(uint32_t index, const Vec3f& n, const Vec3f& w) const {
     return (l.twoSided || glm::dot(n, w) > 0.f) ? l.Le : Rgb(0.f);
 }
 
-bool LightSet::sample(const Vec3f& ref, float uPick, Vec2f u, LightSample& out) const {
-    if (lights_.empty()) return false;
+uint32_t LightSet::pick(float uPick) const {
     uint32_t index = uint32_t(std::upper_bound(cdf_.begin(), cdf_.end(), uPick) - cdf_.begin());
     index = std::min<uint32_t>(index, uint32_t(lights_.size() - 1));
     while (pmf_[index] == 0.f && index > 0) --index;  // uPick landed on a zero-power entry's edge
-    if (pmf_[index] == 0.f) return false;
+    return pmf_[index] == 0.f ? kInvalidId : index;
+}
+
+bool LightSet::sample(const Vec3f& ref, float uPick, Vec2f u, LightSample& out) const {
+    if (lights_.empty()) return false;
+    uint32_t index = pick(uPick);
+    if (index == kInvalidId) return false;
+    out.index = index;
+    const Light& l = lights_[index];
+    if (l.type == LightType::Point) {
+        // Delta position: the "density" is the discrete selection probability and the incident
+        // radiance integrates to the irradiance I / d² (inverse-square law).
+        out.p = l.position;
+        out.n = Vec3f(0.f);
+        Vec3f d = l.position - ref;
+        float dist2 = glm::dot(d, d);
+        if (!(dist2 > 0.f)) return false;
+        out.Le = l.Le / dist2;
+        out.pdfW = pmf_[index];
+        out.isDelta = true;
+        return true;
+    }
     float pdfW = sampleOne(index, ref, u, out);
     if (!(pdfW > 0.f) || !std::isfinite(pdfW)) return false;
     out.pdfW = pdfW * pmf_[index];
+    out.isDelta = false;
     out.Le = emitted(index, out.n, glm::normalize(ref - out.p));
     return true;
+}
+
+bool LightSet::sampleEmission(float uPick, Vec2f uPos, Vec2f uDir, LightEmission& out) const {
+    if (lights_.empty()) return false;
+    uint32_t index = pick(uPick);
+    if (index == kInvalidId) return false;
+    const Light& l = lights_[index];
+    out.index = index;
+    if (l.type == LightType::Point) {
+        out.p = l.position;
+        out.n = Vec3f(0.f);
+        out.dir = sampleUniformSphere(uDir);
+        out.Le = l.Le;
+        out.pdfPosA = pmf_[index];
+        out.pdfDirW = kUniformSpherePdfW;
+        out.isDeltaPos = true;
+        return true;
+    }
+    if (l.type == LightType::Triangle) {
+        const TriangleMesh& mesh = geometry_->meshes[l.geomId];
+        const glm::uvec3& t = mesh.triangles[l.primId];
+        const Vec3f &p0 = mesh.positions[t.x], &p1 = mesh.positions[t.y], &p2 = mesh.positions[t.z];
+        Vec2f b = sampleUniformTriangle(uPos);
+        out.p = b.x * p0 + b.y * p1 + (1.f - b.x - b.y) * p2;
+        out.n = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+    } else {
+        const Sphere& s = geometry_->spheres[l.primId];
+        out.n = sampleUniformSphere(uPos);
+        out.p = sphereSurfacePoint(s.center, s.radius, s.center + s.radius * out.n);
+    }
+    // Direction: cosine-weighted about the emitting face. A two-sided emitter picks a face with
+    // probability ½, reusing uDir.x so the sample stays stratified.
+    Vec3f face = out.n;
+    Vec2f u = uDir;
+    if (l.twoSided) {
+        if (u.x < 0.5f) {
+            u.x *= 2.f;
+        } else {
+            u.x = std::min(2.f * u.x - 1.f, kOneMinusEpsilon);
+            face = -face;
+        }
+    }
+    Frame frame(face);
+    Vec3f local = sampleCosineHemisphere(u);
+    if (!(local.z > 0.f)) return false;
+    out.dir = glm::normalize(frame.toWorld(local));
+    out.Le = l.Le;
+    out.isDeltaPos = false;
+    pdfEmission(index, out.n, out.dir, out.pdfPosA, out.pdfDirW);
+    return out.pdfPosA > 0.f && out.pdfDirW > 0.f;
+}
+
+void LightSet::pdfEmission(uint32_t index, const Vec3f& n, const Vec3f& dir, float& pdfPosA, float& pdfDirW) const {
+    const Light& l = lights_[index];
+    if (l.type == LightType::Point) {
+        pdfPosA = pmf_[index];
+        pdfDirW = kUniformSpherePdfW;
+        return;
+    }
+    pdfPosA = l.area > 0.f ? pmf_[index] / l.area : 0.f;
+    float c = glm::dot(n, dir);
+    if (l.twoSided) pdfDirW = 0.5f * std::abs(c) * kInvPi;
+    else pdfDirW = c > 0.f ? c * kInvPi : 0.f;
 }
 
 float LightSet::pdfW(uint32_t index, const Vec3f& ref, const Vec3f& pLight, const Vec3f& nLight) const {
@@ -135,6 +228,7 @@ float LightSet::sampleOne(uint32_t index, const Vec3f& ref, Vec2f u, LightSample
 
 float LightSet::pdfOneW(uint32_t index, const Vec3f& ref, const Vec3f& pLight, const Vec3f& nLight) const {
     const Light& l = lights_[index];
+    if (l.type == LightType::Point) return 0.f;  // a delta light is never hit by a ray
     if (l.type == LightType::Sphere) {
         const Sphere& s = geometry_->spheres[l.primId];
         Vec3d toCenter = Vec3d(s.center) - Vec3d(ref);

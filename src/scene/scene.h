@@ -43,6 +43,7 @@ public:
 
     SceneGeometry geometry;
     std::vector<Material> materials;
+    std::vector<PointLightDesc> pointLights;  ///< KHR_lights_punctual point lights (world space)
     std::optional<CameraDesc> camera;
     RenderSettings settings;
     std::string sourcePath;  ///< the file it was loaded from (for messages and metadata)

@@ -1,0 +1,130 @@
+#include "integrators/bdpt_connect.h"
+
+#include <array>
+
+namespace tessera {
+namespace {
+
+/// |cos| between a unit direction and the vertex's shading normal; 1 off surfaces (point light).
+/// Shading normals here pair with the shading correction inside evalVertex (Veach 1997, §5.3).
+float cosAt(const PathVertex& v, const Vec3f& w) { return v.onSurface() ? std::abs(glm::dot(v.ns, w)) : 1.f; }
+
+bool unoccluded(const RenderContext& ctx, const PathVertex& a, const PathVertex& b) {
+    return !ctx.accel.occluded(spawnShadowRay(a.p, a.offsetNormal(), b.p, b.offsetNormal()));
+}
+
+/// Fixed-capacity scratch for the MIS densities, growing on the heap only for very long paths.
+class MisScratch {
+public:
+    MisScratch(const MisScratch&) = delete;
+    explicit MisScratch(size_t n) : heap_(n > kInline ? n : 0) { data_ = n > kInline ? heap_.data() : inline_.data(); }
+    MisVertex& operator[](size_t i) { return data_[i]; }
+    MisVertex* data() { return data_; }
+
+private:
+    static constexpr size_t kInline = 32;
+    std::array<MisVertex, kInline> inline_{};
+    std::vector<MisVertex> heap_;
+    MisVertex* data_;
+};
+
+}  // namespace
+
+float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
+                         int s, int t, const PathVertex* qs, const PathVertex* pt, MisHeuristic heuristic) {
+    MisScratch y{size_t(s)}, z{size_t(t)};
+    for (int i = 0; i < s; ++i) y[size_t(i)] = {light[size_t(i)].pdfFwdA, light[size_t(i)].pdfRevA, light[size_t(i)].delta};
+    for (int i = 0; i < t; ++i) z[size_t(i)] = {camera[size_t(i)].pdfFwdA, camera[size_t(i)].pdfRevA, camera[size_t(i)].delta};
+    const PathVertex* qsMinus = s >= 2 ? &light[size_t(s - 2)] : nullptr;
+    const PathVertex* ptMinus = t >= 2 ? &camera[size_t(t - 2)] : nullptr;
+
+    // A resampled light endpoint (s = 1) is weighted with the density of the light sub-path's own
+    // origin sampling (pdfPosA). Exact for triangle and point lights (NEE also samples them by
+    // area / selection only); for spheres, whose NEE samples the visible cone, it is a proxy: the
+    // weights still sum to 1 over the strategies of every path, which is all unbiasedness needs
+    // (Veach 1997, §9.2.2, eq. 9.6). The same holds for ignoring Russian roulette in the densities.
+    if (s == 1) y[0] = {pdfLightOriginA(ctx, *qs), y[0].pdfRevA, false};
+    // A camera endpoint on an emitter acts as the light vertex y0 of strategy s = 1: never delta.
+    if (s == 0) z[size_t(t - 1)].delta = false;
+
+    // The four densities the connection changes (pbrt-v3 §16.3.4's "pdfRev" updates):
+    // z(t−1) sampled from the light side: from y(s−1) (given y(s−2)), or as an emitter origin.
+    z[size_t(t - 1)].pdfRevA = s > 0 ? pdfNextA(ctx, qsMinus, *qs, *pt) : pdfLightOriginA(ctx, *pt);
+    // z(t−2) sampled from z(t−1) given y(s−1), or emitted from z(t−1) when it lies on a light.
+    if (ptMinus) z[size_t(t - 2)].pdfRevA = s > 0 ? pdfNextA(ctx, qs, *pt, *ptMinus) : pdfLightDirectionA(ctx, *pt, *ptMinus);
+    // y(s−1) sampled from z(t−1) given z(t−2); y(s−2) from y(s−1) given z(t−1).
+    if (s > 0) y[size_t(s - 1)].pdfRevA = pdfNextA(ctx, ptMinus, *pt, *qs);
+    if (qsMinus) y[size_t(s - 2)].pdfRevA = pdfNextA(ctx, pt, *qs, *qsMinus);
+
+    bool lightIsDelta = false;
+    if (s > 0) {
+        const PathVertex& y0 = s == 1 ? *qs : light[0];
+        lightIsDelta = ctx.scene.lights().isDeltaPosition(y0.lightIndex);
+    }
+    return bdptMisWeight({y.data(), size_t(s)}, {z.data(), size_t(t)}, lightIsDelta, heuristic);
+}
+
+ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
+                             int s, int t, Sampler& sampler, MisHeuristic heuristic, bool computeWeight) {
+    ConnectionResult r;
+    if (t < 1 || s + t < 2) return r;
+    PathVertex sampled;  // the resampled endpoint for s = 1 or t = 1
+    const PathVertex* qs = s > 0 ? &light[size_t(s - 1)] : nullptr;
+    const PathVertex* pt = &camera.data()[t - 1];  // not dereferenced when t = 1 (replaced below)
+
+    if (s == 0) {
+        // The camera sub-path found an emitter: C = α_E · Le (Veach eq. 10.8 with s = 0).
+        r.L = pt->beta * emittedAt(ctx, *pt);
+    } else if (t == 1) {
+        // Light tracing: connect y(s−1) to a lens point; the contribution lands on another pixel.
+        if (!qs->connectible()) return r;
+        CameraSample cs;
+        if (!ctx.camera.sampleIncoming(qs->p, sampler.get2D(), cs)) return r;
+        sampled.type = VertexType::Camera;
+        sampled.p = cs.pLens;
+        sampled.ng = sampled.ns = ctx.camera.forward();
+        sampled.beta = Rgb(cs.We / cs.pdfW);
+        Rgb f = evalVertex(ctx, *qs, sampled, TransportMode::Importance);
+        r.L = qs->beta * f * sampled.beta * cosAt(*qs, cs.wiWorld);
+        if (isBlack(r.L) || !unoccluded(ctx, *qs, sampled)) return ConnectionResult{};
+        r.raster = cs.raster;
+        pt = &sampled;
+    } else if (s == 1) {
+        // Next-event estimation: resample the light point from z(t−1).
+        if (!pt->connectible() || ctx.scene.lights().empty()) return r;
+        // Sample from the point offset to wo's side, as ptnee does (see path_tracer.cpp).
+        Vec3f pRef = offsetRayOrigin(pt->p, glm::dot(pt->woWorld, pt->ng) >= 0.f ? pt->ng : -pt->ng);
+        LightSample ls;
+        float uPick = sampler.get1D();
+        Vec2f uLight = sampler.get2D();
+        if (!ctx.scene.lights().sample(pRef, uPick, uLight, ls) || isBlack(ls.Le)) return r;
+        sampled.type = VertexType::Light;
+        sampled.p = ls.p;
+        sampled.ng = sampled.ns = ls.n;
+        sampled.lightIndex = ls.index;
+        sampled.beta = ls.Le / ls.pdfW;  // radiance (area) or I/d² (point) over the NEE density
+        Vec3f w = ls.p - pt->p;
+        float len = glm::length(w);
+        if (!(len > 0.f)) return r;
+        Rgb f = evalVertex(ctx, *pt, sampled, TransportMode::Radiance);
+        r.L = pt->beta * f * sampled.beta * cosAt(*pt, w / len);
+        if (isBlack(r.L) || !unoccluded(ctx, *pt, sampled)) return ConnectionResult{};
+        qs = &sampled;
+    } else {
+        // General connection (Veach eq. 10.8): α_L · f(y) · G · f(z) · α_E.
+        if (!qs->connectible() || !pt->connectible()) return r;
+        Vec3f w = pt->p - qs->p;
+        float dist2 = glm::dot(w, w);
+        if (!(dist2 > 0.f)) return r;
+        Vec3f wn = w / std::sqrt(dist2);
+        float G = cosAt(*qs, wn) * cosAt(*pt, wn) / dist2;
+        r.L = qs->beta * evalVertex(ctx, *qs, *pt, TransportMode::Importance) * G *
+              evalVertex(ctx, *pt, *qs, TransportMode::Radiance) * pt->beta;
+        if (isBlack(r.L) || !unoccluded(ctx, *qs, *pt)) return ConnectionResult{};
+    }
+    if (isBlack(r.L)) return ConnectionResult{};
+    r.weight = computeWeight ? bdptStrategyWeight(ctx, light, camera, s, t, qs, pt, heuristic) : 1.f;
+    return r;
+}
+
+}  // namespace tessera

@@ -1,0 +1,37 @@
+#pragma once
+/// \file bdpt_connect.h
+/// One BDPT strategy (s, t): joins the first s vertices of a light sub-path with the first t of a
+/// camera sub-path and returns the unweighted contribution together with its MIS weight.
+/// Strategies (Veach 1997, §10.2):
+///   s = 0:  the camera sub-path hit an emitter at z(t−1);
+///   s = 1:  a light point is resampled from z(t−1) (next-event estimation) instead of using y0;
+///   t = 1:  a lens point is resampled from y(s−1) and the contribution lands on another pixel;
+///   else:   y(s−1) and z(t−1) are joined by a shadow ray.
+#include <span>
+
+#include "integrators/bdpt_mis.h"
+#include "integrators/path_vertex.h"
+
+namespace tessera {
+
+struct ConnectionResult {
+    Rgb L{0.f};          ///< unweighted contribution C*_{s,t} (Veach eq. 10.8 without the weight)
+    float weight = 0.f;  ///< MIS weight w_{s,t}
+    Vec2f raster{0.f};   ///< for t = 1: where it lands on the film
+};
+
+/// Evaluates strategy (s, t) on the given sub-paths (s ≤ light.size(), 1 ≤ t ≤ camera.size(),
+/// s + t ≥ 2). Draws random numbers only for s = 1 (light point) and t = 1 (lens point). With
+/// `computeWeight` false the weight is left at 1 (light tracing uses t = 1 alone).
+ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVertex> light,
+                             std::span<const PathVertex> camera, int s, int t, Sampler& sampler,
+                             MisHeuristic heuristic, bool computeWeight = true);
+
+/// The MIS weight of strategy (s, t) given the connection endpoints actually used: `qs` replaces
+/// y(s−1) and `pt` replaces z(t−1) (they differ from the stored ones when resampled, s = 1 or
+/// t = 1). Recomputes the four densities the connection changes (pdfRevA of y(s−1), y(s−2),
+/// z(t−1), z(t−2)) and calls bdptMisWeight.
+float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
+                         int s, int t, const PathVertex* qs, const PathVertex* pt, MisHeuristic heuristic);
+
+}  // namespace tessera

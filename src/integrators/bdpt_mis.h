@@ -1,0 +1,40 @@
+#pragma once
+/// \file bdpt_mis.h
+/// The multiple-importance-sampling weight of one BDPT strategy, written once, as a pure function
+/// of the densities along the path, so that tests can call it on paths they build themselves.
+#include <span>
+
+namespace tessera {
+
+/// The two densities of one path vertex as the MIS weight needs them, *after* the connection of
+/// the strategy being weighted has been made (the endpoints' and their neighbours' pdfRevA
+/// recomputed for the connection, Veach 1997, §10.2).
+struct MisVertex {
+    float pdfFwdA = 0.f;  ///< density of being sampled from its own sub-path's side (0 = delta)
+    float pdfRevA = 0.f;  ///< density of being sampled from the other side (0 = delta)
+    bool delta = false;   ///< scattered by a delta BSDF: no connection may end here
+};
+
+enum class MisHeuristic { Balance, Power };
+
+/// MIS weight of strategy (s, t) for the path y0 … y(s−1) z(t−1) … z0, with `light` = y0 … y(s−1)
+/// and `camera` = z0 … z(t−1) (both in sampling order). `lightIsDelta`: y0 is a delta in position
+/// (point light), so no camera sub-path can hit it (strategy s = 0 impossible for it).
+///
+/// Derivation (Veach 1997, §10.2.2, eqs. 10.9–10.10). Let x0 … x(k) be the path (x0 on the light,
+/// k = s + t − 1) and p_i the area-product density of generating it with i light vertices and
+/// k + 1 − i camera vertices:   p_i = Π_{j<i} p→(x_j) · Π_{j≥i} p←(x_j),
+/// where p→ is a vertex's density from the light side and p← from the camera side. Neighbouring
+/// strategies differ in one vertex only, so
+///     p_{i+1} / p_i = p→(x_i) / p←(x_i).
+/// On the camera sub-path x_i = z_j has p← = pdfFwdA and p→ = pdfRevA; on the light sub-path the
+/// roles swap. The weight with heuristic exponent β (1 = balance, 2 = power, Veach eq. 9.13) is
+///     w_s = p_s^β / Σ_i p_i^β = 1 / (1 + Σ_{i≠s} (p_i / p_s)^β),
+/// and each (p_i / p_s) is a running product of pdfRevA/pdfFwdA ratios walking away from the
+/// connection on either sub-path. Terms whose strategy would connect at a delta vertex are left out
+/// (such a strategy has density 0); delta densities are stored as 0 and remapped to 1, since the
+/// same delta factor appears in both densities of a ratio (Veach 1997, §10.3.5; pbrt's remap0).
+float bdptMisWeight(std::span<const MisVertex> light, std::span<const MisVertex> camera, bool lightIsDelta,
+                    MisHeuristic heuristic);
+
+}  // namespace tessera

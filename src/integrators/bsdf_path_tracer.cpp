@@ -1,0 +1,42 @@
+#include "integrators/bsdf_path_tracer.h"
+
+#include "materials/surface_bsdf.h"
+
+namespace tessera {
+
+// Why this estimator is unbiased: the path throughput β is the product of f·|cos θ|/pdf of the
+// sampled directions, the Monte Carlo estimator of each term of the path integral (Veach 1997,
+// eq. 8.19), and every path that ends on an emitter contributes β·Le exactly once. Russian
+// roulette divides by the survival probability (Arvo & Kirk 1990).
+Rgb BsdfPathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& sampler, SplatSink&) const {
+    const Scene& scene = ctx.scene;
+    Ray ray = ctx.camera.generateRay(raster, sampler.get2D());
+    Rgb L(0.f), beta(1.f);
+    float rrScale = 1.f;
+    for (int depth = 0;; ++depth) {
+        Hit hit;
+        if (!ctx.accel.intersect(ray, hit)) break;
+        SurfaceInteraction si = scene.interaction(ray, hit);
+        Vec3f wo = -glm::normalize(ray.d);
+        if (si.lightIndex != kInvalidId) L += beta * scene.lights().emitted(si.lightIndex, si.ng, wo);
+        if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;
+
+        SurfaceBsdf bsdf(scene.materials[si.materialId], si.ns, si.ng);
+        SurfaceBsdfSample bs;
+        float uLobe = sampler.get1D();
+        Vec2f uDir = sampler.get2D();
+        if (!bsdf.sample(wo, uLobe, uDir, TransportMode::Radiance, bs)) break;
+        beta *= bs.weight;
+        rrScale *= maxComponent(bs.weight) * bs.eta * bs.eta;
+        if (isBlack(beta)) break;
+        if (depth >= 2 && rrScale < 1.f) {
+            if (sampler.get1D() >= rrScale) break;
+            beta /= rrScale;
+            rrScale = 1.f;
+        }
+        ray = spawnRay(si.p, si.ng, bs.wiWorld);
+    }
+    return L;
+}
+
+}  // namespace tessera

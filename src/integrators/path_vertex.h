@@ -1,0 +1,71 @@
+#pragma once
+/// \file path_vertex.h
+/// Sub-path vertices and random walks shared by light tracing (`lt`) and bidirectional path tracing
+/// (`bdpt`). Notation after Veach 1997, ch. 10 and SmallVCM: a light sub-path y0 … y(s−1) starts on
+/// a light, a camera sub-path z0 … z(t−1) at the camera. Every vertex stores
+///  * `pdfFwdA`: area density of the vertex being sampled from its predecessor on its own sub-path;
+///  * `pdfRevA`: area density of it being sampled from its successor, i.e. by a sub-path walking the
+///    other way (filled in once the successor exists, and again for the connection).
+/// A vertex reached after a delta scattering event stores 0 for densities that contain the delta;
+/// the MIS code remaps them to 1 (the deltas cancel in the ratios, Veach 1997, §10.3.5).
+#include <vector>
+
+#include "integrators/integrator.h"
+#include "materials/surface_bsdf.h"
+
+namespace tessera {
+
+/// What a vertex is: the tag of a tagged struct (Tungsten), so no virtual call per vertex.
+enum class VertexType : uint8_t { Camera, Light, Surface };
+
+struct PathVertex {
+    VertexType type = VertexType::Surface;
+    Vec3f p{0.f};
+    Vec3f ng{0.f};       ///< geometric normal (surfaces), emitter normal (area lights), view axis (camera); 0 for point lights
+    Vec3f ns{0.f};       ///< shading normal (surfaces; = ng otherwise)
+    Vec3f woWorld{0.f};  ///< unit direction towards the previous vertex of its own sub-path (surfaces)
+    Rgb beta{0.f};       ///< sub-path throughput up to this vertex (Veach's α, eq. 10.4/10.5)
+    uint32_t materialId = 0;
+    uint32_t lightIndex = kInvalidId;  ///< light vertex: its light; surface vertex: the emitter it lies on, if any
+    bool delta = false;  ///< scattered by a delta BSDF here (cannot be a connection end)
+    float pdfFwdA = 0.f;
+    float pdfRevA = 0.f;
+
+    /// True where densities convert with the cosine at the vertex: surfaces and area-light points.
+    bool onSurface() const { return type == VertexType::Surface || (type == VertexType::Light && ng != Vec3f(0.f)); }
+    /// The normal used to offset shadow-ray ends (zero: no surface to leave, e.g. the lens, a point light).
+    Vec3f offsetNormal() const { return type == VertexType::Camera ? Vec3f(0.f) : ng; }
+    /// True when this vertex can end a connection edge (Veach's "connectible").
+    bool connectible() const { return !delta; }
+};
+
+/// Converts a solid-angle density at `from` into an area density at `to`: pdfW · |cos θ_to| / d²
+/// (Veach 1997, eq. 8.10); no cosine when `to` is not on a surface.
+float convertDensity(float pdfW, const PathVertex& from, const PathVertex& to);
+
+/// Area density at `next` of `cur` sampling `next`, given that `cur` was reached from `prev`
+/// (ignored for camera and light vertices): the BSDF, camera or light-emission direction density.
+float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next);
+/// For a vertex on an emitter (light vertex, or a surface vertex with lightIndex): pdfPosA of the
+/// light sub-path starting there (selection included).
+float pdfLightOriginA(const RenderContext& ctx, const PathVertex& v);
+/// For a vertex on an emitter: area density at `next` of the emitted direction towards `next`.
+float pdfLightDirectionA(const RenderContext& ctx, const PathVertex& v, const PathVertex& next);
+
+/// The "f" of a vertex towards `next` in a connection: BSDF (adjoint for importance, with the
+/// shading correction), emitted radiance / intensity for light vertices, importance We for the camera.
+Rgb evalVertex(const RenderContext& ctx, const PathVertex& v, const PathVertex& next, TransportMode mode);
+/// Emitted radiance of a surface vertex lying on a light, towards its predecessor (s = 0 strategy).
+Rgb emittedAt(const RenderContext& ctx, const PathVertex& v);
+
+/// Upper bound on sub-path vertices: a guard against lossless mirror boxes, never reached in practice
+/// (Russian roulette ends paths; a path that long carries a negligible weight).
+inline constexpr int kMaxSubpathVertices = 1024;
+
+/// Traces the camera sub-path through `raster`: z0 (lens) then surface vertices (radiance transport).
+/// At most `maxVertices` vertices (−1: unlimited, Russian roulette ends it).
+void traceCameraSubpath(const RenderContext& ctx, Vec2f raster, Sampler& sampler, int maxVertices, std::vector<PathVertex>& out);
+/// Traces a light sub-path: y0 on a light (picked ∝ power), then surface vertices (importance transport).
+void traceLightSubpath(const RenderContext& ctx, Sampler& sampler, int maxVertices, std::vector<PathVertex>& out);
+
+}  // namespace tessera

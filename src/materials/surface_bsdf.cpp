@@ -1,0 +1,55 @@
+#include "materials/surface_bsdf.h"
+
+namespace tessera {
+
+bool SurfaceBsdf::sidesAgree(const Vec3f& wo, const Vec3f& wi) const {
+    bool reflectShading = glm::dot(wo, frame_.n) * glm::dot(wi, frame_.n) > 0.f;
+    bool reflectGeometric = glm::dot(wo, ng_) * glm::dot(wi, ng_) > 0.f;
+    return reflectShading == reflectGeometric;
+}
+
+float SurfaceBsdf::shadingCorrection(const Vec3f& wo, const Vec3f& wi, TransportMode mode) const {
+    if (mode == TransportMode::Radiance) return 1.f;
+    // Veach 1997, §5.3: with shading normals the BSDF is not symmetric; the adjoint used for
+    // importance (light sub-paths) is f*(wo→wi) = f(wi→wo) · |wo·ns| |wi·ng| / (|wo·ng| |wi·ns|).
+    float num = std::abs(glm::dot(wo, frame_.n)) * std::abs(glm::dot(wi, ng_));
+    float den = std::abs(glm::dot(wo, ng_)) * std::abs(glm::dot(wi, frame_.n));
+    return den > 0.f ? num / den : 0.f;
+}
+
+Rgb SurfaceBsdf::eval(const Vec3f& wo, const Vec3f& wi, TransportMode mode) const {
+    if (isDelta() || !sidesAgree(wo, wi)) return Rgb(0.f);
+    // Lambert and GGX (the non-delta BSDFs) are symmetric in their arguments, so f(wi→wo) = f(wo→wi)
+    // and only the shading correction differs between the two transport modes.
+    Rgb f = evalBsdf(mat_, frame_.toLocal(wo), frame_.toLocal(wi), mode);
+    return f * shadingCorrection(wo, wi, mode);
+}
+
+float SurfaceBsdf::pdfFwdW(const Vec3f& wo, const Vec3f& wi) const {
+    if (isDelta() || !sidesAgree(wo, wi)) return 0.f;
+    return pdfBsdfW(mat_, frame_.toLocal(wo), frame_.toLocal(wi));
+}
+
+bool SurfaceBsdf::sample(const Vec3f& wo, float uLobe, Vec2f u, TransportMode mode, SurfaceBsdfSample& out) const {
+    Vec3f woL = frame_.toLocal(wo);
+    BsdfSample bs;
+    if (!sampleBsdf(mat_, woL, uLobe, u, mode, bs)) return false;
+    Vec3f wi = frame_.toWorld(bs.wiLocal);
+    if (!sidesAgree(wo, wi)) return false;
+    out.wiWorld = wi;
+    out.isDelta = bs.isDelta;
+    out.eta = bs.eta;
+    out.pdfFwdW = bs.pdfW;
+    if (bs.isDelta) {
+        // The reverse event picks the same lobe (reflection stays reflection, refraction refraction)
+        // with the lobe probability seen from wi; MIS remaps delta densities anyway, so any positive
+        // value that cancels in pdfRev/pdfFwd is fine: use the same discrete probability.
+        out.pdfRevW = bs.pdfW;
+    } else {
+        out.pdfRevW = pdfBsdfW(mat_, bs.wiLocal, woL);
+    }
+    out.weight = bs.weight * shadingCorrection(wo, wi, mode);
+    return true;
+}
+
+}  // namespace tessera

@@ -1,0 +1,123 @@
+// BDPT bookkeeping: the densities the random walks store are the ones the MIS code recomputes, and
+// for random full paths the weights of all strategies that generate the same path sum to one and
+// equal the brute-force p_s^β / Σ p_i^β (Veach 1997, eq. 9.13 / 10.10).
+#include <gtest/gtest.h>
+
+#include "integrators/bdpt_connect.h"
+#include "scene/gltf_loader.h"
+#include "test_helpers.h"
+
+using namespace tessera;
+
+namespace {
+
+void expectRelNear(double a, double b, double rel, const std::string& what) {
+    EXPECT_LE(std::abs(a - b), rel * std::max(std::abs(a), std::abs(b)) + 1e-30) << what << ": " << a << " vs " << b;
+}
+
+}  // namespace
+
+TEST(BdptMis, StoredDensitiesMatchAndWeightsOfAllStrategiesSumToOne) {
+    std::vector<std::string> warnings;
+    Scene scene = loadGltfScene(test::sourcePath("scenes/cornell-box/cornell-box.gltf"), warnings);
+    auto accel = createAccel("embree", scene.geometry);
+    Camera cam(*scene.camera, 32, 32);
+    RenderContext ctx{scene, *accel, cam, -1};
+    uint32_t lightMaterial = 0;
+    for (const TriangleMesh& m : scene.geometry.meshes)
+        if (scene.materials[m.materialId].isEmissive()) lightMaterial = m.materialId;
+
+    std::vector<PathVertex> camera, light;
+    int pathsChecked = 0;
+    for (uint32_t trial = 0; trial < 400 && pathsChecked < 150; ++trial) {
+        Sampler sampler(Vec2i(int(trial % 32), int(trial / 32)), trial, 17);
+        traceCameraSubpath(ctx, Vec2f(float(trial % 32) + 0.5f, float((trial / 32) % 32) + 0.5f), sampler, -1, camera);
+        traceLightSubpath(ctx, sampler, -1, light);
+        // 1. What the walks stored equals the densities recomputed from the vertices.
+        for (size_t j = 1; j < camera.size(); ++j) {
+            float fwd = pdfNextA(ctx, j >= 2 ? &camera[j - 2] : nullptr, camera[j - 1], camera[j]);
+            expectRelNear(camera[j].pdfFwdA, fwd, 1e-3, "camera pdfFwdA");
+            if (j + 2 < camera.size())
+                expectRelNear(camera[j].pdfRevA, pdfNextA(ctx, &camera[j + 2], camera[j + 1], camera[j]), 1e-3, "camera pdfRevA");
+        }
+        for (size_t j = 1; j < light.size(); ++j) {
+            float fwd = pdfNextA(ctx, j >= 2 ? &light[j - 2] : nullptr, light[j - 1], light[j]);
+            expectRelNear(light[j].pdfFwdA, fwd, 1e-3, "light pdfFwdA");
+            if (j + 2 < light.size())
+                expectRelNear(light[j].pdfRevA, pdfNextA(ctx, &light[j + 2], light[j + 1], light[j]), 1e-3, "light pdfRevA");
+        }
+        if (!light.empty()) expectRelNear(light[0].pdfFwdA, pdfLightOriginA(ctx, light[0]), 1e-5, "light origin");
+
+        // 2. A full path x0 … xk: x0 the light sub-path's origin, then the camera sub-path reversed.
+        if (camera.size() < 2 || light.empty()) continue;
+        std::vector<PathVertex> x;
+        x.push_back(light[0]);
+        for (size_t j = camera.size(); j-- > 0;) x.push_back(camera[j]);
+        const int k = int(x.size()) - 1;
+        // p→(x_i): density from the light side; p←(x_i): from the camera side (x_k is the lens).
+        std::vector<double> pL(size_t(k + 1), 0.0), pE(size_t(k + 1), 0.0);
+        pL[0] = pdfLightOriginA(ctx, x[0]);
+        for (int i = 1; i <= k - 1; ++i) pL[size_t(i)] = pdfNextA(ctx, i >= 2 ? &x[size_t(i - 2)] : nullptr, x[size_t(i - 1)], x[size_t(i)]);
+        for (int i = k - 1; i >= 0; --i) pE[size_t(i)] = pdfNextA(ctx, i + 2 <= k ? &x[size_t(i + 2)] : nullptr, x[size_t(i + 1)], x[size_t(i)]);
+        bool positive = true;
+        for (int i = 0; i < k; ++i) positive = positive && pL[size_t(i)] > 0.0 && pE[size_t(i)] > 0.0;
+        if (!positive) continue;  // e.g. x1 behind the one-sided light: such paths carry no light
+        ++pathsChecked;
+
+        for (MisHeuristic h : {MisHeuristic::Power, MisHeuristic::Balance}) {
+            double beta = h == MisHeuristic::Power ? 2.0 : 1.0;
+            std::vector<double> ps(size_t(k + 1));
+            double sumPs = 0.0;
+            for (int s = 0; s <= k; ++s) {  // t = k + 1 − s ≥ 1
+                double p = 1.0;
+                for (int i = 0; i < s; ++i) p *= pL[size_t(i)];
+                for (int i = s; i < k; ++i) p *= pE[size_t(i)];
+                ps[size_t(s)] = std::pow(p, beta);
+                sumPs += ps[size_t(s)];
+            }
+            double sumW = 0.0;
+            for (int s = 0; s <= k; ++s) {
+                int t = k + 1 - s;
+                // Sub-paths as the walks would have produced them for this split.
+                std::vector<PathVertex> ys(x.begin(), x.begin() + s), zs;
+                for (int i = 0; i < s; ++i) ys[size_t(i)].pdfFwdA = float(pL[size_t(i)]), ys[size_t(i)].pdfRevA = float(pE[size_t(i)]);
+                for (int i = k; i >= s; --i) {
+                    PathVertex v = x[size_t(i)];
+                    v.pdfFwdA = float(pE[size_t(i)]);
+                    v.pdfRevA = float(pL[size_t(i)]);
+                    zs.push_back(v);
+                }
+                if (s == 0) {
+                    // The camera sub-path's end lies on the light as an ordinary surface hit.
+                    PathVertex& e = zs.back();
+                    e.type = VertexType::Surface;
+                    e.materialId = lightMaterial;
+                    e.ns = e.ng;
+                    e.woWorld = glm::normalize(x[1].p - x[0].p);
+                }
+                float w = bdptStrategyWeight(ctx, ys, zs, s, t, s > 0 ? &ys.back() : nullptr, &zs.back(), h);
+                expectRelNear(w, ps[size_t(s)] / sumPs, 2e-3, "weight of (s=" + std::to_string(s) + ", t=" + std::to_string(t) + ")");
+                sumW += w;
+            }
+            EXPECT_NEAR(sumW, 1.0, 1e-4) << "path of " << k + 1 << " vertices";
+        }
+    }
+    EXPECT_GE(pathsChecked, 50);
+}
+
+TEST(BdptMis, DeltaVerticesAreSkippedAndTheRestSumToOne) {
+    // Path y0 – y1 – [mirror y2] – z1 – z0 expressed with densities only: strategies connecting at
+    // the mirror vertex are impossible, the others must still sum to one.
+    std::vector<MisVertex> all = {{0.5f, 0.2f, false}, {1.3f, 0.7f, false}, {0.f, 0.f, true}, {2.1f, 0.4f, false}};
+    // Full path x0..x3 plus the camera x4. For split s, light = x0..x(s−1), camera = x4..x(s).
+    double sum = 0.0;
+    for (int s = 0; s <= 4; ++s) {
+        std::vector<MisVertex> light(all.begin(), all.begin() + s), camera;
+        camera.push_back({1.f, 0.f, false});  // lens
+        for (int i = 3; i >= s; --i) camera.push_back({all[size_t(i)].pdfRevA, all[size_t(i)].pdfFwdA, all[size_t(i)].delta});
+        bool possible = !(s >= 1 && all[size_t(s - 1)].delta) && !(s <= 3 && all[size_t(s)].delta);
+        float w = bdptMisWeight(light, camera, false, MisHeuristic::Power);
+        if (possible) sum += w;
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-5);
+}
