@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <string>
 
+#include "render/film.h"
 #include "scene/scene.h"
 
 namespace tessera::test {
@@ -37,6 +38,43 @@ inline TriangleMesh makeUvSphereMesh(Vec3f center, float radius, int rings, int 
             if (r < rings - 1) m.triangles.emplace_back(id(r, s + 1), id(r + 1, s + 1), id(r + 1, s));
         }
     return m;
+}
+
+/// Mean over pixels and its standard error (pixels are independent estimates of the same value).
+inline void pixelMean(const Film& film, double mean[3], double se[3]) {
+    double n = double(film.width()) * film.height();
+    for (int c = 0; c < 3; ++c) {
+        double sum = 0, sumSq = 0;
+        for (int y = 0; y < film.height(); ++y)
+            for (int x = 0; x < film.width(); ++x) {
+                double v = film.pixel(x, y)[c];
+                sum += v;
+                sumSq += v * v;
+            }
+        mean[c] = sum / n;
+        se[c] = std::sqrt(std::max(0.0, (sumSq / n - mean[c] * mean[c]) / (n - 1)));
+    }
+}
+
+/// A closed sphere (radius R = 1) seen from inside, camera at the origin looking down −z.
+inline Scene closedSphere(Rgb albedo, Rgb Le, bool asMesh, const std::vector<PointLightDesc>& pointLights = {},
+                   float apertureRadius = 0.f) {
+    Scene scene;
+    Material m;
+    m.albedo = albedo;
+    m.emission = Le;
+    m.doubleSided = true;
+    scene.materials.push_back(m);
+    Vec3f center(0.1f, -0.2f, 0.05f);
+    if (asMesh) scene.geometry.meshes.push_back(test::makeUvSphereMesh(center, 1.f, 32, 64, 0));
+    else scene.geometry.spheres.push_back(Sphere{"furnace", center, 1.f, 0});
+    scene.pointLights = pointLights;
+    scene.finalize();
+    scene.camera = CameraDesc{};
+    scene.camera->yfov = 1.2f;
+    scene.camera->apertureRadius = apertureRadius;
+    scene.camera->focusDistance = 0.6f;
+    return scene;
 }
 
 }  // namespace tessera::test

@@ -17,43 +17,6 @@ namespace {
 
 const char* const kIntegrators[] = {"pt", "ptnee", "lt", "bdpt"};
 
-/// Mean over pixels and its standard error (pixels are independent estimates of the same value).
-void pixelMean(const Film& film, double mean[3], double se[3]) {
-    double n = double(film.width()) * film.height();
-    for (int c = 0; c < 3; ++c) {
-        double sum = 0, sumSq = 0;
-        for (int y = 0; y < film.height(); ++y)
-            for (int x = 0; x < film.width(); ++x) {
-                double v = film.pixel(x, y)[c];
-                sum += v;
-                sumSq += v * v;
-            }
-        mean[c] = sum / n;
-        se[c] = std::sqrt(std::max(0.0, (sumSq / n - mean[c] * mean[c]) / (n - 1)));
-    }
-}
-
-/// A closed sphere (radius R = 1) seen from inside, camera at the origin looking down −z.
-Scene closedSphere(Rgb albedo, Rgb Le, bool asMesh, const std::vector<PointLightDesc>& pointLights = {},
-                   float apertureRadius = 0.f) {
-    Scene scene;
-    Material m;
-    m.albedo = albedo;
-    m.emission = Le;
-    m.doubleSided = true;
-    scene.materials.push_back(m);
-    Vec3f center(0.1f, -0.2f, 0.05f);
-    if (asMesh) scene.geometry.meshes.push_back(test::makeUvSphereMesh(center, 1.f, 32, 64, 0));
-    else scene.geometry.spheres.push_back(Sphere{"furnace", center, 1.f, 0});
-    scene.pointLights = pointLights;
-    scene.finalize();
-    scene.camera = CameraDesc{};
-    scene.camera->yfov = 1.2f;
-    scene.camera->apertureRadius = apertureRadius;
-    scene.camera->focusDistance = 0.6f;
-    return scene;
-}
-
 Film renderWith(const Scene& scene, const char* integratorName, int w, int h, int spp, uint64_t seed, int threads = 0,
                 const Integrator* integrator = nullptr, int maxDepth = -1) {
     auto accel = createAccel("embree", scene.geometry);
@@ -77,7 +40,7 @@ Film renderWith(const Scene& scene, const char* integratorName, int w, int h, in
 
 void expectImageMean(const Film& film, Rgb expected, const char* name, double relTol) {
     double mean[3], se[3];
-    pixelMean(film, mean, se);
+    test::pixelMean(film, mean, se);
     for (int c = 0; c < 3; ++c) {
         double err = std::abs(mean[c] - expected[c]);
         EXPECT_LT(err, 4.0 * se[c] + 1e-4 * expected[c])
@@ -93,7 +56,7 @@ void expectImageMean(const Film& film, Rgb expected, const char* name, double re
 TEST(IntegratorFurnace, EveryIntegratorGivesLeOverOneMinusAlbedo) {
     Rgb albedo(0.5f, 0.3f, 0.7f), Le(1.f, 2.f, 0.5f);
     for (bool asMesh : {false, true}) {
-        Scene scene = closedSphere(albedo, Le, asMesh);
+        Scene scene = test::closedSphere(albedo, Le, asMesh);
         for (const char* name : kIntegrators) {
             int spp = std::string(name) == "bdpt" ? 24 : std::string(name) == "lt" ? 256 : 64;
             Film film = renderWith(scene, name, 32, 32, spp, 99);
@@ -110,14 +73,14 @@ TEST(IntegratorFurnace, EveryIntegratorGivesLeOverOneMinusAlbedo) {
 TEST(IntegratorFurnace, PointLightAtTheCentreOfAClosedSphere) {
     Rgb albedo(0.5f, 0.3f, 0.7f), I(2.f, 1.f, 3.f);
     Vec3f center(0.1f, -0.2f, 0.05f);  // behind the camera (which looks down −z from the origin)
-    Scene scene = closedSphere(albedo, Rgb(0.f), false, {PointLightDesc{center, I}});
+    Scene scene = test::closedSphere(albedo, Rgb(0.f), false, {PointLightDesc{center, I}});
     Rgb expected = albedo * I / (kPi * (Rgb(1.f) - albedo));
     for (const char* name : kIntegrators) {
         int spp = std::string(name) == "bdpt" ? 24 : 64;
         Film film = renderWith(scene, name, 32, 32, spp, 5);
         if (std::string(name) == "pt") {
             double mean[3], se[3];
-            pixelMean(film, mean, se);
+            test::pixelMean(film, mean, se);
             for (int c = 0; c < 3; ++c) EXPECT_EQ(mean[c], 0.0) << "pt cannot sample a point light";
         } else {
             expectImageMean(film, expected, name, 0.015);
@@ -246,7 +209,7 @@ TEST(IntegratorScenes, EveryIntegratorRendersTheProjectScenesWithoutNaN) {
 // ray generation: light tracing and BDPT through a lens of radius 0.1 still see Le / (1 − a).
 TEST(IntegratorFurnace, ThinLensCameraInTheFurnace) {
     Rgb albedo(0.5f), Le(1.f);
-    Scene scene = closedSphere(albedo, Le, false, {}, /* apertureRadius = */ 0.1f);
+    Scene scene = test::closedSphere(albedo, Le, false, {}, /* apertureRadius = */ 0.1f);
     for (const char* name : {"lt", "bdpt", "ptnee"}) {
         Film film = renderWith(scene, name, 32, 32, std::string(name) == "lt" ? 256 : 24, 21);
         expectImageMean(film, Le / (Rgb(1.f) - albedo), name, 0.01);
@@ -272,10 +235,10 @@ TEST(IntegratorAgreement, ShadingNormalsDoNotSplitRadianceAndImportanceTransport
     scene.camera = CameraDesc{};
     scene.camera->yfov = 1.2f;
     double ref[3], refSe[3];
-    pixelMean(renderWith(scene, "ptnee", 32, 32, 256, 8), ref, refSe);
+    test::pixelMean(renderWith(scene, "ptnee", 32, 32, 256, 8), ref, refSe);
     for (const char* name : {"lt", "bdpt"}) {
         double mean[3], se[3];
-        pixelMean(renderWith(scene, name, 32, 32, std::string(name) == "lt" ? 512 : 64, 9), mean, se);
+        test::pixelMean(renderWith(scene, name, 32, 32, std::string(name) == "lt" ? 512 : 64, 9), mean, se);
         EXPECT_LT(std::abs(mean[0] - ref[0]), 4.0 * std::hypot(se[0], refSe[0])) << name << " " << mean[0] << " vs ptnee " << ref[0];
         EXPECT_LT(std::abs(mean[0] - ref[0]), 0.01 * ref[0]) << name << " " << mean[0] << " vs ptnee " << ref[0];
     }

@@ -12,45 +12,6 @@ using namespace tessera;
 
 namespace {
 
-struct ImageStats {
-    double mean[3], standardError[3];
-};
-
-/// Mean over pixels and its standard error (pixels are independent estimates of the same value).
-ImageStats pixelStatistics(const Film& film) {
-    ImageStats s{};
-    double n = double(film.width()) * film.height();
-    for (int c = 0; c < 3; ++c) {
-        double sum = 0, sumSq = 0;
-        for (int y = 0; y < film.height(); ++y)
-            for (int x = 0; x < film.width(); ++x) {
-                double v = film.pixel(x, y)[c];
-                sum += v;
-                sumSq += v * v;
-            }
-        s.mean[c] = sum / n;
-        s.standardError[c] = std::sqrt(std::max(0.0, (sumSq / n - s.mean[c] * s.mean[c]) / (n - 1)));
-    }
-    return s;
-}
-
-/// A closed sphere seen from its centre: every surface has albedo a and emits Le (both faces), so
-/// the radiance everywhere is Le (1 + a + a² + …) = Le / (1 − a).
-Scene furnaceScene(Rgb albedo, Rgb Le, bool asMesh) {
-    Scene scene;
-    Material m;
-    m.albedo = albedo;
-    m.emission = Le;
-    m.doubleSided = true;
-    scene.materials.push_back(m);
-    if (asMesh) scene.geometry.meshes.push_back(test::makeUvSphereMesh(Vec3f(0.1f, -0.2f, 0.05f), 1.f, 32, 64, 0));
-    else scene.geometry.spheres.push_back(Sphere{"furnace", Vec3f(0.1f, -0.2f, 0.05f), 1.f, 0});
-    scene.finalize();
-    scene.camera = CameraDesc{};
-    scene.camera->yfov = 1.2f;
-    return scene;
-}
-
 void expectFurnace(const Scene& scene, Rgb albedo, Rgb Le, int spp) {
     auto accel = createAccel("embree", scene.geometry);
     auto integrator = createIntegrator("ptnee");
@@ -62,13 +23,13 @@ void expectFurnace(const Scene& scene, Rgb albedo, Rgb Le, int spp) {
     opt.seed = 1234;
     RenderStats stats = renderImage(ctx, *integrator, film, opt);
     EXPECT_EQ(stats.nonFiniteDropped, 0u);
-    ImageStats s = pixelStatistics(film);
+    double mean[3], se[3];
+    test::pixelMean(film, mean, se);
     for (int c = 0; c < 3; ++c) {
         double expected = Le[c] / (1.0 - albedo[c]);
-        double err = std::abs(s.mean[c] - expected);
-        EXPECT_LT(err, 3.0 * s.standardError[c]) << "channel " << c << " mean " << s.mean[c] << " expected " << expected
-                                                 << " se " << s.standardError[c];
-        EXPECT_LT(err, 0.005 * expected) << "channel " << c << " mean " << s.mean[c] << " expected " << expected;
+        double err = std::abs(mean[c] - expected);
+        EXPECT_LT(err, 3.0 * se[c]) << "channel " << c << " mean " << mean[c] << " expected " << expected << " se " << se[c];
+        EXPECT_LT(err, 0.005 * expected) << "channel " << c << " mean " << mean[c] << " expected " << expected;
     }
 }
 
@@ -76,12 +37,12 @@ void expectFurnace(const Scene& scene, Rgb albedo, Rgb Le, int spp) {
 
 TEST(Furnace, AnalyticSphereGivesLeOverOneMinusAlbedo) {
     Rgb albedo(0.5f, 0.3f, 0.8f), Le(1.f, 2.f, 0.5f);
-    expectFurnace(furnaceScene(albedo, Le, false), albedo, Le, 96);
+    expectFurnace(test::closedSphere(albedo, Le, false), albedo, Le, 96);
 }
 
 TEST(Furnace, TriangleMeshSphereGivesLeOverOneMinusAlbedo) {
     Rgb albedo(0.6f), Le(1.f);
-    expectFurnace(furnaceScene(albedo, Le, true), albedo, Le, 96);
+    expectFurnace(test::closedSphere(albedo, Le, true), albedo, Le, 96);
 }
 
 TEST(Determinism, OneAndTwoThreadsGiveTheSameBits) {
