@@ -6,6 +6,14 @@
 
 namespace tessera {
 namespace {
+/// Uniform point (pdfA = 1/area) on triangle `primId` of `mesh`, with its unit geometric normal.
+void samplePointOnTriangle(const TriangleMesh& mesh, uint32_t primId, Vec2f u, Vec3f& p, Vec3f& n) {
+    const glm::uvec3& t = mesh.triangles[primId];
+    const Vec3f &p0 = mesh.positions[t.x], &p1 = mesh.positions[t.y], &p2 = mesh.positions[t.z];
+    Vec2f b = sampleUniformTriangle(u);
+    p = b.x * p0 + b.y * p1 + (1.f - b.x - b.y) * p2;
+    n = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+}
 /// Below sin²θmax = sin²(1.5°) the cone's 1 − cos θmax cancels catastrophically in float: use the
 /// series 1 − cos θ ≈ sin²θ / 2 instead (the same threshold pbrt-v4 uses).
 constexpr float kSmallConeSin2 = 0.00068523f;
@@ -130,12 +138,7 @@ bool LightSet::sampleEmission(float uPick, Vec2f uPos, Vec2f uDir, LightEmission
         return true;
     }
     if (l.type == LightType::Triangle) {
-        const TriangleMesh& mesh = geometry_->meshes[l.geomId];
-        const glm::uvec3& t = mesh.triangles[l.primId];
-        const Vec3f &p0 = mesh.positions[t.x], &p1 = mesh.positions[t.y], &p2 = mesh.positions[t.z];
-        Vec2f b = sampleUniformTriangle(uPos);
-        out.p = b.x * p0 + b.y * p1 + (1.f - b.x - b.y) * p2;
-        out.n = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+        samplePointOnTriangle(geometry_->meshes[l.geomId], l.primId, uPos, out.p, out.n);
     } else {
         const Sphere& s = geometry_->spheres[l.primId];
         out.n = sampleUniformSphere(uPos);
@@ -183,12 +186,7 @@ float LightSet::pdfW(uint32_t index, const Vec3f& ref, const Vec3f& pLight, cons
 float LightSet::sampleOne(uint32_t index, const Vec3f& ref, Vec2f u, LightSample& out) const {
     const Light& l = lights_[index];
     if (l.type == LightType::Triangle) {
-        const TriangleMesh& mesh = geometry_->meshes[l.geomId];
-        const glm::uvec3& t = mesh.triangles[l.primId];
-        const Vec3f &p0 = mesh.positions[t.x], &p1 = mesh.positions[t.y], &p2 = mesh.positions[t.z];
-        Vec2f b = sampleUniformTriangle(u);
-        out.p = b.x * p0 + b.y * p1 + (1.f - b.x - b.y) * p2;
-        out.n = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+        samplePointOnTriangle(geometry_->meshes[l.geomId], l.primId, u, out.p, out.n);
         return pdfOneW(index, ref, out.p, out.n);
     }
     const Sphere& s = geometry_->spheres[l.primId];
