@@ -222,8 +222,17 @@ BvhAccel::BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, c
     else buildTree();
 
     if (!prims_.empty()) {
-        nodes_.reserve(bin.primIndices.size() / 2 + 1);
-        triangles_.reserve(bin.primIndices.size() / 2 + 1);
+        // Exact Triangle4 count first (a walk over the binary tree costs a few ms): reserving a guess
+        // and shrinking afterwards copied ~50 MB on the dragon.
+        size_t blocks = 0;
+        std::vector<uint32_t> todo{0u};
+        while (!todo.empty()) {
+            const BvhBuildNode& n = bin.nodes[todo.back()];
+            todo.pop_back();
+            if (n.isLeaf()) blocks += (n.count + 3) / 4;
+            else todo.push_back(n.left), todo.push_back(n.right);
+        }
+        triangles_.reserve(blocks);
         if (bin.nodes[0].isLeaf()) {
             // A wide root is always an inner node: one leaf child, seven empty lanes.
             nodes_.emplace_back();
@@ -239,7 +248,6 @@ BvhAccel::BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, c
         }
     }
     nodes_.shrink_to_fit();
-    triangles_.shrink_to_fit();
 
     stats_.primitives = total;
     stats_.memoryBytes = nodes_.size() * sizeof(Node8) + triangles_.size() * sizeof(Triangle4) +
@@ -317,6 +325,18 @@ uint32_t BvhAccel::collapse(const BinaryBvh& bin, uint32_t binNode) {
     return index;
 }
 
+/// Starts loading a child the ray will (probably) visit: the traversal is bound by cache misses on
+/// incoherent rays (a node is 3.5 lines, a leaf block 2.75), and issuing every hit child's lines at
+/// once overlaps their latencies instead of paying them one after another.
+TESSERA_INLINE void BvhAccel::prefetchChild(uint32_t ref) const {
+    const char* p;
+    int lines;
+    if (!(ref & kLeafBit)) p = reinterpret_cast<const char*>(&nodes_[ref]), lines = 4;
+    else if (!(ref & kMixedBit)) p = reinterpret_cast<const char*>(&triangles_[(ref & ~kLeafBit) >> 2]), lines = 3 * (int(ref & 3u) + 1);
+    else return;
+    for (int l = 0; l < lines; ++l) __builtin_prefetch(p + 64 * l);
+}
+
 std::string_view BvhAccel::isa() const { return useAvx2_ ? "avx2" : "sse2/portable"; }
 
 template <bool kAvx>
@@ -352,6 +372,7 @@ TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                     int i = __builtin_ctz(mask);
                     mask &= mask - 1;
                     StackEntry e{node.child[i], tNear[i]};
+                    prefetchChild(e.ref);
                     int j = n++;
                     while (j > 0 && hits[j - 1].tNear < e.tNear) hits[j] = hits[j - 1], --j;
                     hits[j] = e;
@@ -457,6 +478,7 @@ TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
                     mask &= mask - 1;
                     if (tNear[i] < tNear[nearest]) std::swap(i, nearest);
                     stack[sp++] = node.child[i];
+                    prefetchChild(node.child[i]);
                 }
                 ref = node.child[nearest];
                 continue;

@@ -59,6 +59,7 @@ private:
     bool intersectAvx2(const Ray& ray, Hit& hit) const;
     bool occludedAvx2(const Ray& ray) const;
 
+    void prefetchChild(uint32_t ref) const;
     uint32_t collapse(const BinaryBvh& bin, uint32_t binNode);
     uint32_t makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf);
 
