@@ -8,6 +8,7 @@
 
 #include "accel/accel.h"
 #include "accel/bvh_builder.h"
+#include "core/huge_page_allocator.h"
 
 namespace tessera {
 
@@ -66,8 +67,8 @@ private:
     const SceneGeometry& geometry_;
     BvhConfig config_;
     std::vector<PrimRef> prims_;  ///< build primitive index → (geomId, primId)
-    std::vector<Node8> nodes_;    ///< node 0 is the root (absent for an empty scene)
-    std::vector<Triangle4> triangles_;
+    std::vector<Node8, HugePageAllocator<Node8>> nodes_;    ///< node 0 is the root (absent for an empty scene)
+    std::vector<Triangle4, HugePageAllocator<Triangle4>> triangles_;
     std::vector<PrimRef> mixedPrims_;
     Bounds3f bounds_;
     AccelStats stats_;

@@ -144,7 +144,27 @@ private:
     float blocks(uint32_t n) const { return float((n + uint32_t(config_.sahBlockSize) - 1) / uint32_t(config_.sahBlockSize)); }
 
     void binRange(uint32_t begin, uint32_t end, const BinMapping& map, Binning& bins) const {
-        for (uint32_t i = begin; i < end; ++i) {
+        uint32_t i = begin;
+        if (end - begin >= 256) {
+            // Neighbouring references usually fall into the same bin (the array is partitioned
+            // spatially), so one set of bins makes every update wait for the previous store of the
+            // same bin. Alternating between two sets halves that dependency chain; min/max and
+            // counts merge exactly.
+            Binning odd(map.binCount);
+            for (; i + 1 < end; i += 2) {
+                const Ref& r0 = refs_[i];
+                const Ref& r1 = refs_[i + 1];
+                Vi4 b0 = map.bins(r0.c), b1 = map.bins(r1.c);
+                bins.add(0, b0[0], r0.lo, r0.hi);
+                odd.add(0, b1[0], r1.lo, r1.hi);
+                bins.add(1, b0[1], r0.lo, r0.hi);
+                odd.add(1, b1[1], r1.lo, r1.hi);
+                bins.add(2, b0[2], r0.lo, r0.hi);
+                odd.add(2, b1[2], r1.lo, r1.hi);
+            }
+            bins.merge(odd, map.binCount);
+        }
+        for (; i < end; ++i) {
             const Ref& r = refs_[i];
             Vi4 b = map.bins(r.c);
             bins.add(0, b[0], r.lo, r.hi);
