@@ -204,15 +204,17 @@ private:
     Split findSplit(const Binning& bins, int k) const {
         Split best;
         for (int a = 0; a < 3; ++a) {
-            std::array<float, kMaxBins> rightCost{};
-            std::array<Box, kMaxBins> rightBox;
+            // Plain arrays, written only for the k bins in use: default-constructing 32 boxes per
+            // axis per node cost more than the sweep itself on the many small nodes.
+            float rightCost[kMaxBins];
+            Vf4 rightLo[kMaxBins], rightHi[kMaxBins];
             Box acc;
             uint32_t count = 0;
             for (int i = k - 1; i > 0; --i) {
                 acc.extend(bins.lo[a][i], bins.hi[a][i]);
                 count += bins.counts[a][i];
                 rightCost[i] = acc.halfArea() * blocks(count);
-                rightBox[i] = acc;
+                rightLo[i] = acc.lo, rightHi[i] = acc.hi;
             }
             acc = Box();
             count = 0;
@@ -225,7 +227,7 @@ private:
                 float cost = acc.halfArea() * blocks(count) + rightCost[i];
                 if (cost < best.cost) {  // strict: lowest axis, then bin, wins ties
                     best.axis = a, best.bin = i, best.cost = cost;
-                    best.left = acc, best.right = rightBox[i];
+                    best.left = acc, best.right.lo = rightLo[i], best.right.hi = rightHi[i];
                 }
             }
         }
