@@ -87,18 +87,20 @@ struct BoxRay {
 /// operation, so both give bit-identical t, u, v.
 struct TriRay {
     int kx, ky, kz;
-    float sx, sy, sz;
-    Vec3f o;
     float tMin;
-    explicit TriRay(const Ray& ray) : o(ray.o), tMin(ray.tMin) {
+    // Splatted once per ray: selecting o[kx] with a run-time index inside every leaf test compiled
+    // to a chain of compares and branches ahead of each leaf's first load.
+    Vf4 ox, oy, oz, sx, sy, sz;
+    explicit TriRay(const Ray& ray) : tMin(ray.tMin) {
         Vec3f ad = glm::abs(ray.d);
         kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
         kx = (kz + 1) % 3;
         ky = (kx + 1) % 3;
         if (ray.d[kz] < 0.f) std::swap(kx, ky);
-        sx = ray.d[kx] / ray.d[kz];
-        sy = ray.d[ky] / ray.d[kz];
-        sz = 1.f / ray.d[kz];
+        sx = splat4(ray.d[kx] / ray.d[kz]);
+        sy = splat4(ray.d[ky] / ray.d[kz]);
+        sz = splat4(1.f / ray.d[kz]);
+        ox = splat4(ray.o[kx]), oy = splat4(ray.o[ky]), oz = splat4(ray.o[kz]);
     }
 };
 
@@ -111,8 +113,7 @@ struct TriangleCandidate {
 /// at once). Returns the nearest lane hit in (tMin, tMax), or lane −1.
 TESSERA_INLINE TriangleCandidate intersectTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
     const int kx = r.kx, ky = r.ky, kz = r.kz;
-    Vf4 ox = splat4(r.o[kx]), oy = splat4(r.o[ky]), oz = splat4(r.o[kz]);
-    Vf4 sx = splat4(r.sx), sy = splat4(r.sy), sz = splat4(r.sz);
+    const Vf4 ox = r.ox, oy = r.oy, oz = r.oz, sx = r.sx, sy = r.sy, sz = r.sz;
     Vf4 aX = load4(tri.p[0][kx]) - ox, aY = load4(tri.p[0][ky]) - oy, aZ = load4(tri.p[0][kz]) - oz;
     Vf4 bX = load4(tri.p[1][kx]) - ox, bY = load4(tri.p[1][ky]) - oy, bZ = load4(tri.p[1][kz]) - oz;
     Vf4 cX = load4(tri.p[2][kx]) - ox, cY = load4(tri.p[2][ky]) - oy, cZ = load4(tri.p[2][kz]) - oz;
