@@ -13,19 +13,6 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-/// The watertight test may report a hit a few ulps outside the exact triangle (its shear rounds), so
-/// every triangle is treated as if it were this much larger: 2^-20 of its coordinates' magnitude, the
-/// same padding as the BVH's boxes. Cells then reference a triangle wherever such a hit can lie.
-/// Axes on which the triangle is flat are not padded: a ray meets the plane of an axis-aligned
-/// triangle at one point, which lies in the cells on both sides of that plane, so the triangle keeps
-/// its planar events (W&H's planar primitives) and may sit in a split plane.
-Vec3f trianglePad(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2) {
-    Vec3f m = glm::max(glm::abs(p0), glm::max(glm::abs(p1), glm::abs(p2)));
-    float pad = 0x1p-20f * maxComponent(m);
-    Vec3f lo = glm::min(p0, glm::min(p1, p2)), hi = glm::max(p0, glm::max(p1, p2));
-    return Vec3f(lo.x < hi.x ? pad : 0.f, lo.y < hi.y ? pad : 0.f, lo.z < hi.z ? pad : 0.f);
-}
-
 Bounds3f paddedSphereBounds(const Sphere& s) {
     float pad = 1e-6f * (s.radius + maxComponent(glm::abs(s.center)));  // as the BVH and Embree backends
     Bounds3f b = sphereBounds(s);
@@ -119,9 +106,9 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
             const Vec3f &p0 = mesh.positions[t.x], &p1 = mesh.positions[t.y], &p2 = mesh.positions[t.z];
             Bounds3f b;
             b.extend(p0), b.extend(p1), b.extend(p2);
+            // Exact boxes: padding them would make neighbours sharing a vertex straddle every plane
+            // through it. The traversal is conservative instead (kdtree_traversal.cpp).
             if (!finiteBounds(b)) continue;  // a non-finite vertex can never be hit
-            Vec3f pad = trianglePad(p0, p1, p2);
-            b.lower -= pad, b.upper += pad;
             prims_.push_back({g, i});
             primBounds.push_back(b);
         }
@@ -133,28 +120,23 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
         primBounds.push_back(b);
     }
 
-    // Perfect splits: the triangle, enlarged by its padding, clipped to the cell. Clipping against
-    // the cell grown by the pad and then growing the result keeps every point within `pad` of the
-    // triangle inside the box; the builder intersects it with the cell. Spheres keep their box.
+    // Perfect splits: the triangle clipped to the cell (in double, rounded outward). Spheres keep
+    // their box (the builder intersects it with the cell).
     KdClipFunction clip = [&](uint32_t prim, const Bounds3f& cell) -> Bounds3f {
         PrimRef ref = prims_[prim];
         if (ref.geomId == geometry_.sphereGeomId()) return primBounds[prim];
         const TriangleMesh& mesh = geometry_.meshes[ref.geomId];
         const glm::uvec3& t = mesh.triangles[ref.primId];
         const Vec3f &p0 = mesh.positions[t.x], &p1 = mesh.positions[t.y], &p2 = mesh.positions[t.z];
-        Vec3f pad = trianglePad(p0, p1, p2);
-        Bounds3f grown = cell;
-        grown.lower -= pad, grown.upper += pad;
-        Bounds3f b = clipTriangleBounds(p0, p1, p2, grown);
-        if (b.empty()) return b;
-        b.lower -= pad, b.upper += pad;
-        return b;
+        return clipTriangleBounds(p0, p1, p2, cell);
     };
     KdTree tree;
     auto buildTree = [&] { tree = buildKdTree(primBounds, clip, config_); };
     if (options.threads > 0) tbb::task_arena(options.threads).execute(buildTree);
     else buildTree();
     rootCell_ = tree.bounds;
+    sceneMagnitude_ = std::max(maxComponent(glm::abs(rootCell_.lower)), maxComponent(glm::abs(rootCell_.upper)));
+    if (!std::isfinite(sceneMagnitude_)) sceneMagnitude_ = 0.f;
     buildStats_ = tree.stats;
 
     // Leaves become blocks of four triangles (or a scalar list when a sphere is among them).

@@ -61,7 +61,8 @@ private:
     std::vector<Triangle4> triangles_;
     std::vector<PrimRef> mixedPrims_;
     Bounds3f bounds_;   ///< of the geometry (as reported)
-    Bounds3f rootCell_; ///< the tree's root cell (padded primitive boxes)
+    Bounds3f rootCell_; ///< the tree's root cell (union of the primitive boxes)
+    float sceneMagnitude_ = 0.f;  ///< largest |coordinate| of the root cell (traversal tolerance)
     AccelStats stats_;
     KdBuildStats buildStats_;
 };

@@ -113,7 +113,7 @@ class KdBuilder {
 public:
     KdBuilder(std::span<const Bounds3f> bounds, const KdClipFunction& clip, const KdConfig& config, KdTree& out)
         : bounds_(bounds), clip_(clip), config_(config), out_(out), side_(bounds.size(), kBoth) {
-        blockSize_ = std::max(1, config.sahBlockSize);
+        while ((1 << blockShift_) < config.sahBlockSize && blockShift_ < 8) ++blockShift_;
     }
 
     /// Builds the subtree of `cell` from its sorted events (consumed); returns its expected cost
@@ -127,6 +127,7 @@ public:
             return makeLeaf(events, count);
         }
         size_t segment[4];
+        out_.stats.eventsSwept += events.size();
         SplitCandidate best = findSplit(events, count, cell, segment);
         // pbrt-v3's termination: a split worse than a leaf is allowed a few times along a path.
         bool bad = best.cost >= leafCost;
@@ -172,7 +173,9 @@ public:
     }
 
 private:
-    float blocks(uint32_t n) const { return float((n + uint32_t(blockSize_) - 1) / uint32_t(blockSize_)); }
+    /// B(n) = ⌈n / sahBlockSize⌉ with the block size rounded up to a power of two (a shift, not a
+    /// division: the sweep evaluates this twice per candidate plane).
+    float blocks(uint32_t n) const { return float((n + (1u << blockShift_) - 1u) >> blockShift_); }
 
     /// One sweep over the sorted events of all three axes (W&H Algorithm 4, "FindPlane"): at each
     /// plane, N_L counts primitives entirely or partly before it, N_P those lying in it, N_R those
@@ -322,7 +325,7 @@ private:
     const KdClipFunction& clip_;
     KdConfig config_;
     KdTree& out_;
-    int blockSize_ = 4;
+    int blockShift_ = 0;
     std::vector<uint8_t> side_;
     std::vector<uint32_t> straddlers_;
     std::vector<Event> keptLeft_, keptRight_, newLeft_, newRight_;

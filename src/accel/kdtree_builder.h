@@ -27,10 +27,11 @@ namespace tessera {
 /// (writeup.md, "k-d tree").
 struct KdConfig {
     /// Cost of one traversal step (inner node), relative to intersectionCost.
-    float traversalCost = 1.0f;
+    float traversalCost = 2.0f;
     /// Cost of intersecting one leaf block of `sahBlockSize` primitives.
     float intersectionCost = 1.5f;
-    /// Primitives one leaf test handles together; 1 gives the classic per-primitive SAH.
+    /// Primitives one leaf test handles together (rounded up to a power of two); 1 gives the
+    /// classic per-primitive SAH.
     int sahBlockSize = 4;
     /// Fraction of the cost saved when one child is empty (W&H use λ = 0.8, i.e. 0.2; pbrt 0.5).
     float emptyBonus = 0.2f;
@@ -39,7 +40,7 @@ struct KdConfig {
     /// Splits whose SAH cost exceeds the leaf cost are still tried this many times along a path
     /// (they may pay off deeper down, pbrt-v3's "bad refines"); a subtree that in the end costs more
     /// than a leaf is retracted into one.
-    int maxBadRefines = 3;
+    int maxBadRefines = 1;
     /// Clip straddling primitives to the child cells (W&H "perfect splits"); false keeps their boxes.
     bool perfectSplits = true;
 };
@@ -68,6 +69,7 @@ using KdClipFunction = std::function<Bounds3f(uint32_t prim, const Bounds3f& cel
 struct KdBuildStats {
     size_t innerNodes = 0, leaves = 0, emptyLeaves = 0, references = 0;
     size_t depthLimitHits = 0, retractions = 0;
+    size_t eventsSwept = 0;  ///< sum over nodes of their event-list lengths: the build's work
     int maxDepth = 0, depthLimit = 0;
     double sahCost = 0.0;  ///< expected cost of the tree (root-relative SAH, no empty bonus)
 };

@@ -15,6 +15,7 @@ namespace tessera {
 
 using namespace simd;
 
+
 namespace {
 
 /// |x| enlarged by two ulps (inf stays inf): Ize 2013's conservative far reciprocal.
@@ -27,11 +28,8 @@ inline float twoUlpsLarger(float x) {
     return x;
 }
 
-/// t ± 4 ulps. A plane distance (s − o)·(1/d) carries about 1.5 ulps of error, and so do the cell
-/// bounds it is compared with; the visit decisions below compare against padded bounds so that a
-/// rounding error can only make the ray visit a child more, never skip one it enters.
+/// t + 4 ulps, for comparisons of two computed distances along the same ray.
 inline float padUp(float t) { return t + std::abs(t) * 0x1p-21f; }
-inline float padDown(float t) { return t - std::abs(t) * 0x1p-21f; }
 
 struct StackEntry {
     uint32_t node;
@@ -117,13 +115,27 @@ bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
     Vec3f invD;
     for (int a = 0; a < 3; ++a) invD[a] = 1.f / ray.d[a];  // ±inf for ±0.0
 
-    // Clip the ray to the root cell: conservative slabs (Ize 2013), NaN-safe operand order (a 0·inf
-    // NaN, from an origin on a slab plane of a zero direction component, leaves the interval alone).
+    // Robustness. Primitive boxes and perfect splits are exact, but the watertight test may report
+    // a hit up to a few ulps of the coordinates' magnitude (relative to the ray origin) outside the
+    // exact triangle. So the traversal visits every cell that the ray passes within `eps` of:
+    // 16 ulps of the largest coordinate involved. Across a plane of axis a that is a distance of
+    // eps·|1/d_a| along the ray (large for rays almost parallel to the plane), which pads each
+    // visit decision. Segment bounds stay unpadded, so the early exit stays exact.
+    const float eps = 0x1p-19f * (sceneMagnitude_ + maxComponent(glm::abs(ray.o)));
+    Vec3f padT;
+    bool upward[3];
+    for (int a = 0; a < 3; ++a) {
+        padT[a] = ray.d[a] != 0.f ? eps * std::abs(invD[a]) : 0.f;
+        upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
+    }
+
+    // Clip the ray to the root cell grown by eps: conservative slabs (Ize 2013), NaN-safe operand
+    // order (a 0·inf NaN, from an origin on a slab plane of a zero direction component, leaves the
+    // interval alone).
     float tMin = ray.tMin, tMax = ray.tMax;
     for (int a = 0; a < 3; ++a) {
-        bool neg = std::signbit(invD[a]);
-        float nearPlane = neg ? rootCell_.upper[a] : rootCell_.lower[a];
-        float farPlane = neg ? rootCell_.lower[a] : rootCell_.upper[a];
+        float nearPlane = upward[a] ? rootCell_.lower[a] - eps : rootCell_.upper[a] + eps;
+        float farPlane = upward[a] ? rootCell_.upper[a] + eps : rootCell_.lower[a] - eps;
         float tn = (nearPlane - ray.o[a]) * invD[a];
         float tf = (farPlane - ray.o[a]) * twoUlpsLarger(invD[a]);
         tMin = tn > tMin ? tn : tMin;
@@ -148,21 +160,21 @@ bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
         if (!node.isLeaf()) {
             const int a = node.axis();
             const float split = node.split();
-            const float oa = ray.o[a];
-            const float tPlane = (split - oa) * invD[a];
-            // Which child holds the ray's start: ties (origin in the plane) go by the direction.
-            const bool belowFirst = oa < split || (oa == split && ray.d[a] <= 0.f);
-            const uint32_t nearChild = belowFirst ? index + 1 : node.aboveChild();
-            const uint32_t farChild = belowFirst ? node.aboveChild() : index + 1;
-            // NaN (origin in the plane, direction parallel to it) fails every test: both children.
-            if (tPlane > padUp(tMax) || tPlane <= 0.f) {
-                index = nearChild;
-            } else if (tPlane < padDown(tMin)) {
-                index = farChild;
+            const float tPlane = (split - ray.o[a]) * invD[a];
+            // The ray is below the plane before tPlane when moving upward. NaN (origin in the plane,
+            // direction parallel to it) fails both tests below: both children are visited.
+            const uint32_t firstChild = upward[a] ? index + 1 : node.aboveChild();
+            const uint32_t secondChild = upward[a] ? node.aboveChild() : index + 1;
+            const bool skipFirst = tMin > tPlane + padT[a];
+            const bool skipSecond = tPlane - padT[a] > tMax;
+            if (skipSecond) {
+                index = firstChild;
+            } else if (skipFirst) {
+                index = secondChild;
             } else {
-                stack[sp++] = {farChild, tPlane, tMax};
-                index = nearChild;
-                tMax = tPlane;
+                stack[sp++] = {secondChild, tPlane > tMin ? tPlane : tMin, tMax};
+                index = firstChild;
+                tMax = tPlane < tMax ? tPlane : tMax;
             }
             continue;
         }

@@ -113,6 +113,17 @@ nlohmann::json configJson(const BvhConfig& c) {
             {"maxSahDepth", c.maxSahDepth}, {"width", 8}, {"leaf", "Triangle4 watertight (Woop 2013)"}};
 }
 
+/// The k-d tree's build statistics (empty for other structures).
+nlohmann::json kdStatsJson(const Accel& accel) {
+    const auto* kd = dynamic_cast<const KdTreeAccel*>(&accel);
+    if (!kd) return nlohmann::json::object();
+    const KdBuildStats& s = kd->buildStats();
+    return {{"innerNodes", s.innerNodes}, {"leaves", s.leaves}, {"emptyLeaves", s.emptyLeaves},
+            {"referencesPerPrimitive", accel.stats().primitives ? double(s.references) / double(accel.stats().primitives) : 0.0},
+            {"maxDepth", s.maxDepth}, {"depthLimit", s.depthLimit}, {"depthLimitHits", s.depthLimitHits},
+            {"retractions", s.retractions}, {"eventsSwept", s.eventsSwept}, {"sahCost", s.sahCost}};
+}
+
 nlohmann::json kdConfigJson(const KdConfig& c) {
     return {{"traversalCost", c.traversalCost}, {"intersectionCost", c.intersectionCost}, {"sahBlockSize", c.sahBlockSize},
             {"emptyBonus", c.emptyBonus}, {"maxDepth", c.maxDepth}, {"maxBadRefines", c.maxBadRefines},
@@ -132,14 +143,19 @@ int runComplexity(const std::vector<std::string>& inputs, const std::vector<std:
         double n = double(g.primitiveCount()), nLogN = n * std::log2(std::max(n, 2.0));
         for (const std::string& name : accels) {
             std::vector<double> seconds;
-            for (int rep = 0; rep < repeat; ++rep) seconds.push_back(createAccel(name, g, options)->stats().buildSeconds);
+            nlohmann::json kdStats;
+            for (int rep = 0; rep < repeat; ++rep) {
+                auto accel = createAccel(name, g, options);
+                seconds.push_back(accel->stats().buildSeconds);
+                kdStats = kdStatsJson(*accel);
+            }
             double s = median(seconds);
             rows.push_back({{"input", input}, {"structure", name}, {"primitives", g.primitiveCount()}, {"buildSeconds", s},
-                            {"nsPerNLog2N", s / nLogN * 1e9}});
+                            {"nsPerNLog2N", s / nLogN * 1e9}, {"kdStats", kdStats}});
             if (!json)
                 std::cout << std::left << std::setw(11) << name << std::setw(12) << g.primitiveCount() << std::fixed
                           << std::setprecision(3) << std::setw(28) << s << std::setprecision(2) << s / nLogN * 1e9 << "   "
-                          << input << "\n";
+                          << input << (kdStats.empty() ? std::string() : " " + kdStats.dump()) << "\n";
         }
     }
     if (json) std::cout << nlohmann::json{{"threads", options.threads}, {"repeat", repeat}, {"kdConfig", kdConfigJson(KdConfig{})},
@@ -193,11 +209,13 @@ Runner addBenchAccelCommand(CLI::App& app) {
             std::map<std::string, std::vector<double>> buildSeconds;
             std::map<std::string, std::map<std::string, std::vector<double>>> mrays;
             std::map<std::string, AccelStats> stats;
+            std::map<std::string, nlohmann::json> kdStats;
             size_t checksum = 0;
             for (int rep = 0; rep < opt->repeat; ++rep) {
                 for (const std::string& name : accels) {  // interleaved: each repeat runs every structure
                     auto accel = createAccel(name, g, options);
                     stats[name] = accel->stats();
+                    kdStats[name] = kdStatsJson(*accel);
                     buildSeconds[name].push_back(accel->stats().buildSeconds);
                     for (const std::string& kind : kinds) {
                         const std::vector<Ray>& set = rays.get(kind);
@@ -230,6 +248,10 @@ Runner addBenchAccelCommand(CLI::App& app) {
                         s["ratioToEmbree"][kind] = ratio;
                         line << " (" << ratio << "x)";
                     }
+                }
+                if (!kdStats[name].empty()) {
+                    s["kdStats"] = kdStats[name];
+                    line << "\n           " << kdStats[name].dump();
                 }
                 entry["structures"][name] = s;
                 if (!opt->json) std::cout << line.str() << "\n";
