@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <cstdio>
+#include <cstdlib>
 
 namespace tessera {
 
@@ -92,6 +94,12 @@ Bounds3f clipTriangleBounds(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, c
 
 KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& options, const KdConfig& config)
     : geometry_(geometry), config_(config) {
+    if (const char* env = std::getenv("TESSERA_KD_EXPERIMENT")) {  // TEMPORARY tuning hook
+        int perfect = 1;
+        std::sscanf(env, "%f %f %d %f %d %d %f", &config_.traversalCost, &config_.intersectionCost, &config_.sahBlockSize,
+                    &config_.emptyBonus, &config_.maxBadRefines, &perfect, &config_.emptyCutMinFraction);
+        config_.perfectSplits = perfect != 0;
+    }
     auto start = std::chrono::steady_clock::now();
     bounds_ = geometry.bounds();
 

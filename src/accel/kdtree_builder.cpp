@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 
 #include "core/error.h"
 
@@ -100,6 +101,24 @@ void radixSortEvents(std::vector<Event>& events) {
     }
 }
 
+/// A node's sorted events. Not a std::vector: children's lists are written once by a merge, and
+/// value-initialising them first would cost a pass over every event of every level.
+struct EventList {
+    std::unique_ptr<Event[]> data;
+    size_t size = 0;
+    void allocate(size_t n) {
+        data.reset(n ? new Event[n] : nullptr);
+        size = n;
+    }
+    void release() {
+        data.reset();
+        size = 0;
+    }
+    const Event* begin() const { return data.get(); }
+    const Event* end() const { return data.get() + size; }
+    Event operator[](size_t i) const { return data[i]; }
+};
+
 enum Side : uint8_t { kBoth = 0, kLeftOnly = 1, kRightOnly = 2 };
 
 struct SplitCandidate {
@@ -113,12 +132,12 @@ class KdBuilder {
 public:
     KdBuilder(std::span<const Bounds3f> bounds, const KdClipFunction& clip, const KdConfig& config, KdTree& out)
         : bounds_(bounds), clip_(clip), config_(config), out_(out), side_(bounds.size(), kBoth) {
-        while ((1 << blockShift_) < config.sahBlockSize && blockShift_ < 8) ++blockShift_;
+        invBlockSize_ = 1.f / float(std::max(1, config.sahBlockSize));
     }
 
     /// Builds the subtree of `cell` from its sorted events (consumed); returns its expected cost
     /// relative to the cell's area (leaf: C_isect·B(N); inner: C_trav + P_L·C_L + P_R·C_R).
-    double build(std::vector<Event>& events, uint32_t count, const Bounds3f& cell, int depth, int badRefines) {
+    double build(EventList& events, uint32_t count, const Bounds3f& cell, int depth, int badRefines) {
         out_.stats.maxDepth = std::max(out_.stats.maxDepth, depth);
         const float leafCost = config_.intersectionCost * blocks(count);
         if (count == 0) return makeLeaf(events, 0);
@@ -127,7 +146,7 @@ public:
             return makeLeaf(events, count);
         }
         size_t segment[4];
-        out_.stats.eventsSwept += events.size();
+        out_.stats.eventsSwept += events.size;
         SplitCandidate best = findSplit(events, count, cell, segment);
         // pbrt-v3's termination: a split worse than a leaf is allowed a few times along a path.
         bool bad = best.cost >= leafCost;
@@ -142,7 +161,7 @@ public:
         Bounds3f leftCell = cell, rightCell = cell;
         leftCell.upper[best.axis] = best.pos;
         rightCell.lower[best.axis] = best.pos;
-        std::vector<Event> left, right;
+        EventList left, right;
         uint32_t leftCount = 0, rightCount = 0;
         split(events, segment, best, leftCell, rightCell, left, right, leftCount, rightCount);
 
@@ -173,19 +192,20 @@ public:
     }
 
 private:
-    /// B(n) = ⌈n / sahBlockSize⌉ with the block size rounded up to a power of two (a shift, not a
-    /// division: the sweep evaluates this twice per candidate plane).
-    float blocks(uint32_t n) const { return float((n + (1u << blockShift_) - 1u) >> blockShift_); }
+    /// B(n) = max(1, n / sahBlockSize) for n > 0: a leaf test costs one SIMD block at least, and
+    /// grows linearly beyond. (⌈n / sahBlockSize⌉ jumps at multiples of the block size, and then a
+    /// split that duplicates almost every reference, 9 → 8 + 8, looks cheaper than a leaf.)
+    float blocks(uint32_t n) const { return n == 0 ? 0.f : std::max(1.f, float(n) * invBlockSize_); }
 
     /// One sweep over the sorted events of all three axes (W&H Algorithm 4, "FindPlane"): at each
     /// plane, N_L counts primitives entirely or partly before it, N_P those lying in it, N_R those
     /// after it; each candidate is evaluated with the planar primitives on either side.
-    SplitCandidate findSplit(const std::vector<Event>& events, uint32_t count, const Bounds3f& cell, size_t segment[4]) const {
+    SplitCandidate findSplit(const EventList& events, uint32_t count, const Bounds3f& cell, size_t segment[4]) const {
         SplitCandidate best;
         const Vec3f d = cell.diagonal();
         const float area = cell.surfaceArea();
         segment[0] = 0;
-        segment[1] = segment[2] = segment[3] = events.size();
+        segment[1] = segment[2] = segment[3] = events.size;
         if (!(area > 0.f)) return best;  // a cell flat on two axes: no area to split
         const float invArea = 1.f / area;
         const float kt = config_.traversalCost, ki = config_.intersectionCost;
@@ -193,7 +213,7 @@ private:
         int axis = -1;
         uint32_t nl = 0, nr = 0;
         float lo = 0.f, hi = 0.f, crossArea = 0.f, perimeter = 0.f;
-        const size_t n = events.size();
+        const size_t n = events.size;
         size_t i = 0;
         while (i < n) {
             Event e = events[i];
@@ -217,9 +237,11 @@ private:
                 // Children's areas: 2·(len·(d_b + d_c) + d_b·d_c); flat cells (d = 0) are fine.
                 float pl = 2.f * ((p - lo) * perimeter + crossArea) * invArea;
                 float pr = 2.f * ((hi - p) * perimeter + crossArea) * invArea;
+                const float minEmpty = config_.emptyCutMinFraction * (hi - lo);
+                const bool thickLeft = p - lo >= minEmpty, thickRight = hi - p >= minEmpty;
                 auto sah = [&](uint32_t cl, uint32_t cr) {
                     float c = kt + ki * (pl * blocks(cl) + pr * blocks(cr));
-                    return (cl == 0 || cr == 0) ? lambdaEmpty * c : c;
+                    return ((cl == 0 && thickLeft) || (cr == 0 && thickRight)) ? lambdaEmpty * c : c;
                 };
                 float costLeft = sah(nl + np, nr), costRight = sah(nl, nr + np);
                 // Planar primitives go to the cheaper side (W&H Section 3.3).
@@ -235,8 +257,8 @@ private:
     /// Classifies the primitives (W&H Algorithm 5), splits the sorted event list stably into the
     /// children's lists and merges in the freshly sorted events of the straddling primitives,
     /// clipped to each child cell (W&H Section 4.3). Consumes `events`.
-    void split(std::vector<Event>& events, const size_t segment[4], const SplitCandidate& s, const Bounds3f& leftCell,
-               const Bounds3f& rightCell, std::vector<Event>& left, std::vector<Event>& right, uint32_t& leftCount,
+    void split(EventList& events, const size_t segment[4], const SplitCandidate& s, const Bounds3f& leftCell,
+               const Bounds3f& rightCell, EventList& left, EventList& right, uint32_t& leftCount,
                uint32_t& rightCount) {
         const size_t begin = segment[s.axis], end = segment[s.axis + 1];
         for (size_t i = begin; i < end; ++i)
@@ -264,13 +286,21 @@ private:
             else if (side == kRightOnly) ++rightCount;
             else straddlers_.push_back(prim);
         }
-        keptLeft_.clear(), keptRight_.clear();
+        // Stable partition without branches: every event is written to both lists, and only the
+        // cursor of its side advances (straddlers advance neither: their events are regenerated).
+        if (keptLeft_.size() < events.size) keptLeft_.resize(events.size), keptRight_.resize(events.size);
+        size_t nLeft = 0, nRight = 0;
+        Event* keptL = keptLeft_.data();
+        Event* keptR = keptRight_.data();
+        const uint8_t* side = side_.data();
         for (Event e : events) {
-            Side side = Side(side_[eventPrim(e)]);
-            if (side == kLeftOnly) keptLeft_.push_back(e);
-            else if (side == kRightOnly) keptRight_.push_back(e);
+            uint8_t sd = side[eventPrim(e)];
+            keptL[nLeft] = e;
+            keptR[nRight] = e;
+            nLeft += sd == kLeftOnly;
+            nRight += sd == kRightOnly;
         }
-        std::vector<Event>().swap(events);  // the parent's list is no longer needed
+        events.release();  // the parent's list is no longer needed
 
         newLeft_.clear(), newRight_.clear();
         for (uint32_t prim : straddlers_) {
@@ -280,10 +310,10 @@ private:
         }
         std::sort(newLeft_.begin(), newLeft_.end());
         std::sort(newRight_.begin(), newRight_.end());
-        left.resize(keptLeft_.size() + newLeft_.size());
-        std::merge(keptLeft_.begin(), keptLeft_.end(), newLeft_.begin(), newLeft_.end(), left.begin());
-        right.resize(keptRight_.size() + newRight_.size());
-        std::merge(keptRight_.begin(), keptRight_.end(), newRight_.begin(), newRight_.end(), right.begin());
+        left.allocate(nLeft + newLeft_.size());
+        std::merge(keptL, keptL + nLeft, newLeft_.begin(), newLeft_.end(), left.data.get());
+        right.allocate(nRight + newRight_.size());
+        std::merge(keptR, keptR + nRight, newRight_.begin(), newRight_.end(), right.data.get());
     }
 
     /// The primitive clipped to the cell (perfect split), always within the cell.
@@ -294,7 +324,7 @@ private:
         return b;
     }
 
-    std::vector<uint32_t> primsOf(const std::vector<Event>& events) const {
+    std::vector<uint32_t> primsOf(const EventList& events) const {
         std::vector<uint32_t> prims;
         for (Event e : events) {
             if (eventAxis(e) != 0) break;
@@ -303,9 +333,9 @@ private:
         return prims;
     }
 
-    double makeLeaf(std::vector<Event>& events, uint32_t count) {
+    double makeLeaf(EventList& events, uint32_t count) {
         std::vector<uint32_t> prims = primsOf(events);
-        std::vector<Event>().swap(events);
+        events.release();
         (void)count;
         return emitLeaf(prims);
     }
@@ -325,7 +355,7 @@ private:
     const KdClipFunction& clip_;
     KdConfig config_;
     KdTree& out_;
-    int blockShift_ = 0;
+    float invBlockSize_ = 1.f;
     std::vector<uint8_t> side_;
     std::vector<uint32_t> straddlers_;
     std::vector<Event> keptLeft_, keptRight_, newLeft_, newRight_;
@@ -360,8 +390,12 @@ KdTree buildKdTree(std::span<const Bounds3f> primBounds, const KdClipFunction& c
         }
     radixSortEvents(events);
 
+    EventList root;
+    root.allocate(events.size());
+    std::copy(events.begin(), events.end(), root.data.get());
+    std::vector<Event>().swap(events);
     KdBuilder builder(primBounds, clip, config, tree);
-    tree.stats.sahCost = builder.build(events, uint32_t(n), tree.bounds, 0, 0);
+    tree.stats.sahCost = builder.build(root, uint32_t(n), tree.bounds, 0, 0);
     tree.nodes.shrink_to_fit();
     tree.primIndices.shrink_to_fit();
     return tree;

@@ -20,9 +20,11 @@ namespace tessera {
 /// Parameters of the SAH build. The cost of a split at plane p of cell V is (Wald & Havran 2006,
 /// Section 3, "SAH" with the empty-space factor λ):
 ///   C(p) = λ(p) · (C_trav + C_isect · (A_L/A_V · B(N_L) + A_R/A_V · B(N_R))),
-///   λ(p) = 1 − emptyBonus when N_L = 0 or N_R = 0, else 1,
-/// where A are surface areas and B(n) = ⌈n / sahBlockSize⌉ the number of SIMD leaf blocks (our leaf
-/// tests 4 triangles at once, so a leaf of 1..4 triangles costs one test). A leaf costs C_isect·B(N).
+///   λ(p) = 1 − emptyBonus when N_L = 0 or N_R = 0 and the empty child spans at least
+///          emptyCutMinFraction of the cell along the split axis, else 1,
+/// where A are surface areas and B(n) = max(1, n / sahBlockSize) (n > 0) the SIMD leaf blocks a leaf
+/// of n primitives costs (ours tests 4 triangles at once, so 1..4 triangles cost one test; linear
+/// beyond, not rounded up: see KdBuilder::blocks). A leaf costs C_isect·B(N).
 /// Defaults measured on the Stanford dragon with the traversal of kdtree_traversal.cpp
 /// (writeup.md, "k-d tree").
 struct KdConfig {
@@ -30,11 +32,14 @@ struct KdConfig {
     float traversalCost = 2.0f;
     /// Cost of intersecting one leaf block of `sahBlockSize` primitives.
     float intersectionCost = 1.5f;
-    /// Primitives one leaf test handles together (rounded up to a power of two); 1 gives the
-    /// classic per-primitive SAH.
+    /// Primitives one leaf test handles together; 1 gives the classic per-primitive SAH.
     int sahBlockSize = 4;
     /// Fraction of the cost saved when one child is empty (W&H use λ = 0.8, i.e. 0.2; pbrt 0.5).
     float emptyBonus = 0.2f;
+    /// The bonus needs an empty child at least this thick (fraction of the cell along the axis).
+    /// Without it, once C_trav < emptyBonus/(1 − emptyBonus)·C_isect·B(N), cutting off *any* sliver
+    /// of empty space looks profitable and every leaf descends to the depth limit.
+    float emptyCutMinFraction = 0.1f;
     /// Depth limit; 0 means 8 + 1.3·log2 N (pbrt-v3, W&H), capped at kKdMaxDepth.
     int maxDepth = 0;
     /// Splits whose SAH cost exceeds the leaf cost are still tried this many times along a path

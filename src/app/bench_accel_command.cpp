@@ -126,7 +126,7 @@ nlohmann::json kdStatsJson(const Accel& accel) {
 
 nlohmann::json kdConfigJson(const KdConfig& c) {
     return {{"traversalCost", c.traversalCost}, {"intersectionCost", c.intersectionCost}, {"sahBlockSize", c.sahBlockSize},
-            {"emptyBonus", c.emptyBonus}, {"maxDepth", c.maxDepth}, {"maxBadRefines", c.maxBadRefines},
+            {"emptyBonus", c.emptyBonus}, {"emptyCutMinFraction", c.emptyCutMinFraction}, {"maxDepth", c.maxDepth}, {"maxBadRefines", c.maxBadRefines},
             {"perfectSplits", c.perfectSplits}};
 }
 
