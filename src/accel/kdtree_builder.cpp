@@ -261,19 +261,22 @@ private:
                const Bounds3f& rightCell, EventList& left, EventList& right, uint32_t& leftCount,
                uint32_t& rightCount) {
         const size_t begin = segment[s.axis], end = segment[s.axis + 1];
-        for (size_t i = begin; i < end; ++i)
-            if (eventType(events[i]) != kEnd) side_[eventPrim(events[i])] = kBoth;
+        // One pass over the split axis's events, in position order (W&H Algorithm 5 folded): a start
+        // before the plane marks its primitive as straddling until its end event, if also at or
+        // before the plane, marks it left; a start at or after the plane marks it right; planar
+        // events go by position, those in the plane by the SAH's choice. Ends after the plane leave
+        // the mark alone (their primitive straddles or was marked right by its start).
+        const uint32_t splitKey = sortableBits(s.pos);
+        uint8_t* side = side_.data();
+        const uint8_t planarInPlane = s.planarLeft ? kLeftOnly : kRightOnly;
         for (size_t i = begin; i < end; ++i) {
             Event e = events[i];
-            uint32_t type = eventType(e);
-            float p = eventPos(e);
-            uint32_t prim = eventPrim(e);
-            if (type == kEnd && p <= s.pos) side_[prim] = kLeftOnly;
-            else if (type == kStart && p >= s.pos) side_[prim] = kRightOnly;
-            else if (type == kPlanar) {
-                if (p < s.pos || (p == s.pos && s.planarLeft)) side_[prim] = kLeftOnly;
-                else side_[prim] = kRightOnly;
-            }
+            uint32_t posKey = uint32_t(e >> 30), type = eventType(e), prim = eventPrim(e);
+            uint8_t mark;
+            if (posKey < splitKey) mark = type == kStart ? kBoth : kLeftOnly;
+            else if (posKey == splitKey) mark = type == kEnd ? kLeftOnly : type == kStart ? kRightOnly : planarInPlane;
+            else mark = type == kEnd ? side[prim] : kRightOnly;
+            side[prim] = mark;
         }
         straddlers_.clear();
         leftCount = rightCount = 0;
@@ -292,7 +295,6 @@ private:
         size_t nLeft = 0, nRight = 0;
         Event* keptL = keptLeft_.data();
         Event* keptR = keptRight_.data();
-        const uint8_t* side = side_.data();
         for (Event e : events) {
             uint8_t sd = side[eventPrim(e)];
             keptL[nLeft] = e;
