@@ -6,8 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <cstdio>
-#include <cstdlib>
 
 namespace tessera {
 
@@ -94,12 +92,6 @@ Bounds3f clipTriangleBounds(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, c
 
 KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& options, const KdConfig& config)
     : geometry_(geometry), config_(config) {
-    if (const char* env = std::getenv("TESSERA_KD_EXPERIMENT")) {  // TEMPORARY tuning hook
-        int perfect = 1;
-        std::sscanf(env, "%f %f %d %f %d %d %f", &config_.traversalCost, &config_.intersectionCost, &config_.sahBlockSize,
-                    &config_.emptyBonus, &config_.maxBadRefines, &perfect, &config_.emptyCutMinFraction);
-        config_.perfectSplits = perfect != 0;
-    }
     auto start = std::chrono::steady_clock::now();
     bounds_ = geometry.bounds();
 
@@ -169,7 +161,7 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
                 if (k >= count) {
                     for (int v = 0; v < 3; ++v)
                         for (int a = 0; a < 3; ++a) t4.p[v][a][lane] = kNaN;
-                    t4.geomId[lane] = t4.primId[lane] = kInvalidId;
+                    blockIds_.push_back({kInvalidId, kInvalidId});
                     continue;
                 }
                 PrimRef ref = prims_[tree.primIndices[first + k]];
@@ -177,17 +169,18 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
                 const glm::uvec3& tri = mesh.triangles[ref.primId];
                 for (int v = 0; v < 3; ++v)
                     for (int a = 0; a < 3; ++a) t4.p[v][a][lane] = mesh.positions[tri[v]][a];
-                t4.geomId[lane] = ref.geomId;
-                t4.primId[lane] = ref.primId;
+                blockIds_.push_back(ref);
             }
         }
     }
     triangles_.shrink_to_fit();
+    blockIds_.shrink_to_fit();
     builderNodes_ = std::move(tree.nodes);
     primIndices_ = std::move(tree.primIndices);
 
     stats_.primitives = total;
     stats_.memoryBytes = nodes_.size() * sizeof(KdNode) + triangles_.size() * sizeof(Triangle4) +
+                         blockIds_.size() * sizeof(PrimRef) +
                          mixedPrims_.size() * sizeof(PrimRef);
     stats_.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -200,6 +193,7 @@ uint64_t KdTreeAccel::structureHash() const {
     };
     add(nodes_.data(), nodes_.size() * sizeof(KdNode));
     add(triangles_.data(), triangles_.size() * sizeof(Triangle4));
+    add(blockIds_.data(), blockIds_.size() * sizeof(PrimRef));
     add(mixedPrims_.data(), mixedPrims_.size() * sizeof(PrimRef));
     return h;
 }
@@ -238,7 +232,7 @@ std::string KdTreeAccel::checkInvariants() const {
         for (uint32_t k = 0; k < count; ++k) {
             PrimRef want = prims_[primIndices_[first + k]], got;
             if (n.word1 >> 2 & kMixedFlag) got = mixedPrims_[n.word0 + k];
-            else got = {triangles_[n.word0 + k / 4].geomId[k % 4], triangles_[n.word0 + k / 4].primId[k % 4]};
+            else got = blockIds_[size_t(n.word0) * 4 + k];
             if (want.geomId != got.geomId || want.primId != got.primId) return "leaf block differs from the builder's leaf";
         }
     }

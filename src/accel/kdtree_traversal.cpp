@@ -232,8 +232,9 @@ done:
             Vec3f p[3];
             for (int v = 0; v < 3; ++v) p[v] = {bestBlock->p[v][0][bestLane], bestBlock->p[v][1][bestLane], bestBlock->p[v][2][bestLane]};
             hit->t = tHit, hit->u = bestU, hit->v = bestV;
-            hit->geomId = bestBlock->geomId[bestLane];
-            hit->primId = bestBlock->primId[bestLane];
+            const PrimRef& id = blockIds_[size_t(bestBlock - triangles_.data()) * 4 + size_t(bestLane)];
+            hit->geomId = id.geomId;
+            hit->primId = id.primId;
             hit->ng = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
             return true;
         }
