@@ -158,6 +158,9 @@ bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
     while (true) {
         const KdNode node = nodes[index];
         if (!node.isLeaf()) {
+            // The above child lies far from this node in the depth-first layout; fetching it now
+            // overlaps its cache miss with this step (it is visited next, or pushed and popped).
+            __builtin_prefetch(nodes + node.aboveChild());
             const int a = node.axis();
             const float split = node.split();
             const float tPlane = (split - ray.o[a]) * invD[a];
@@ -167,15 +170,13 @@ bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
             const uint32_t secondChild = upward[a] ? node.aboveChild() : index + 1;
             const bool skipFirst = tMin > tPlane + padT[a];
             const bool skipSecond = tPlane - padT[a] > tMax;
-            if (skipSecond) {
-                index = firstChild;
-            } else if (skipFirst) {
-                index = secondChild;
-            } else {
-                stack[sp++] = {secondChild, tPlane > tMin ? tPlane : tMin, tMax};
-                index = firstChild;
-                tMax = tPlane < tMax ? tPlane : tMax;
-            }
+            // Branch-free step (the three-way choice is a coin toss for incoherent rays): the far
+            // entry is always written and kept only when both children are visited.
+            const bool both = !skipFirst && !skipSecond;
+            stack[sp] = {secondChild, tPlane > tMin ? tPlane : tMin, tMax};
+            sp += both;
+            index = (skipFirst && !skipSecond) ? secondChild : firstChild;
+            tMax = (both && tPlane < tMax) ? tPlane : tMax;
             continue;
         }
         // Leaf.
