@@ -8,6 +8,7 @@
 
 #include "accel/accel.h"
 #include "accel/bvh_builder.h"
+#include "core/huge_page_allocator.h"
 
 namespace tessera {
 
@@ -59,14 +60,15 @@ private:
     bool intersectAvx2(const Ray& ray, Hit& hit) const;
     bool occludedAvx2(const Ray& ray) const;
 
+    void prefetchChild(uint32_t ref) const;
     uint32_t collapse(const BinaryBvh& bin, uint32_t binNode);
     uint32_t makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf);
 
     const SceneGeometry& geometry_;
     BvhConfig config_;
     std::vector<PrimRef> prims_;  ///< build primitive index → (geomId, primId)
-    std::vector<Node8> nodes_;    ///< node 0 is the root (absent for an empty scene)
-    std::vector<Triangle4> triangles_;
+    std::vector<Node8, HugePageAllocator<Node8>> nodes_;    ///< node 0 is the root (absent for an empty scene)
+    std::vector<Triangle4, HugePageAllocator<Triangle4>> triangles_;
     std::vector<PrimRef> mixedPrims_;
     Bounds3f bounds_;
     AccelStats stats_;

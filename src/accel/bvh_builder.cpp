@@ -126,7 +126,7 @@ public:
             bounds.extend(refs_[i].lo, refs_[i].hi);
             centroids.extend(refs_[i].c, refs_[i].c);
         }
-        out_.nodes.resize(2 * n - 1);
+        out_.nodes.allocate(2 * n - 1);
         build(0, 0, uint32_t(n), bounds, centroids, 0);
         out_.primIndices.resize(n);
         for (size_t i = 0; i < n; ++i) out_.primIndices[i] = refs_[i].index();
@@ -144,7 +144,27 @@ private:
     float blocks(uint32_t n) const { return float((n + uint32_t(config_.sahBlockSize) - 1) / uint32_t(config_.sahBlockSize)); }
 
     void binRange(uint32_t begin, uint32_t end, const BinMapping& map, Binning& bins) const {
-        for (uint32_t i = begin; i < end; ++i) {
+        uint32_t i = begin;
+        if (end - begin >= 256) {
+            // Neighbouring references usually fall into the same bin (the array is partitioned
+            // spatially), so one set of bins makes every update wait for the previous store of the
+            // same bin. Alternating between two sets halves that dependency chain; min/max and
+            // counts merge exactly.
+            Binning odd(map.binCount);
+            for (; i + 1 < end; i += 2) {
+                const Ref& r0 = refs_[i];
+                const Ref& r1 = refs_[i + 1];
+                Vi4 b0 = map.bins(r0.c), b1 = map.bins(r1.c);
+                bins.add(0, b0[0], r0.lo, r0.hi);
+                odd.add(0, b1[0], r1.lo, r1.hi);
+                bins.add(1, b0[1], r0.lo, r0.hi);
+                odd.add(1, b1[1], r1.lo, r1.hi);
+                bins.add(2, b0[2], r0.lo, r0.hi);
+                odd.add(2, b1[2], r1.lo, r1.hi);
+            }
+            bins.merge(odd, map.binCount);
+        }
+        for (; i < end; ++i) {
             const Ref& r = refs_[i];
             Vi4 b = map.bins(r.c);
             bins.add(0, b[0], r.lo, r.hi);
@@ -153,14 +173,15 @@ private:
         }
     }
 
-    Binning binPrimitives(uint32_t begin, uint32_t end, const BinMapping& map) const {
+    /// Fills `bins` (constructed for map.binCount bins). Written into the caller's object: a
+    /// Binning is 3.5 KB and returning it by value showed up as a copy in every node.
+    void binPrimitives(uint32_t begin, uint32_t end, const BinMapping& map, Binning& bins) const {
         if (end - begin < uint32_t(4 * config_.parallelThreshold)) {
-            Binning bins(map.binCount);
             binRange(begin, end, map, bins);
-            return bins;
+            return;
         }
         // Bin boxes are min/max and counts integers: the merged result is exact in any order.
-        return tbb::parallel_reduce(
+        bins = tbb::parallel_reduce(
             tbb::blocked_range<uint32_t>(begin, end, 8192), Binning(map.binCount),
             [&](const tbb::blocked_range<uint32_t>& r, Binning acc) {
                 binRange(r.begin(), r.end(), map, acc);
@@ -183,15 +204,17 @@ private:
     Split findSplit(const Binning& bins, int k) const {
         Split best;
         for (int a = 0; a < 3; ++a) {
-            std::array<float, kMaxBins> rightCost{};
-            std::array<Box, kMaxBins> rightBox;
+            // Plain arrays, written only for the k bins in use: default-constructing 32 boxes per
+            // axis per node cost more than the sweep itself on the many small nodes.
+            float rightCost[kMaxBins];
+            Vf4 rightLo[kMaxBins], rightHi[kMaxBins];
             Box acc;
             uint32_t count = 0;
             for (int i = k - 1; i > 0; --i) {
                 acc.extend(bins.lo[a][i], bins.hi[a][i]);
                 count += bins.counts[a][i];
                 rightCost[i] = acc.halfArea() * blocks(count);
-                rightBox[i] = acc;
+                rightLo[i] = acc.lo, rightHi[i] = acc.hi;
             }
             acc = Box();
             count = 0;
@@ -204,7 +227,7 @@ private:
                 float cost = acc.halfArea() * blocks(count) + rightCost[i];
                 if (cost < best.cost) {  // strict: lowest axis, then bin, wins ties
                     best.axis = a, best.bin = i, best.cost = cost;
-                    best.left = acc, best.right = rightBox[i];
+                    best.left = acc, best.right.lo = rightLo[i], best.right.hi = rightHi[i];
                 }
             }
         }
@@ -243,7 +266,9 @@ private:
         bool degenerateCentroids = !(centroidBox.hi[0] > centroidBox.lo[0] || centroidBox.hi[1] > centroidBox.lo[1] ||
                                      centroidBox.hi[2] > centroidBox.lo[2]);
         if (!degenerateCentroids && int(depth) < config_.maxSahDepth) {
-            split = findSplit(binPrimitives(begin, end, map), binCount);
+            Binning bins(binCount);
+            binPrimitives(begin, end, map, bins);
+            split = findSplit(bins, binCount);
             float area = bounds.halfArea();
             float leafCost = config_.intersectionCost * blocks(n);
             float splitCost = area > 0.f ? config_.traversalCost + config_.intersectionCost * split.cost / area : kInfinity;

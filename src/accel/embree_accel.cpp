@@ -2,6 +2,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstring>
 #include <stdexcept>
@@ -120,7 +121,6 @@ EmbreeAccel::EmbreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
         rtcCommitGeometry(geom);
         rtcAttachGeometryByID(scene, geom, g);
         rtcReleaseGeometry(geom);
-        stats_.memoryBytes += mesh.positions.size() * 16 + mesh.triangles.size() * 12;
     }
     if (!geometry.spheres.empty()) {
         RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
@@ -133,7 +133,20 @@ EmbreeAccel::EmbreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
         rtcAttachGeometryByID(scene, geom, geometry.sphereGeomId());
         rtcReleaseGeometry(geom);
     }
+    // Memory of the structure itself, as for our own (accel.h: excluding the scene's vertex data):
+    // the bytes Embree's allocator still holds after the build minus those it held before, seen
+    // through its memory monitor (temporary build memory is freed by then).
+    std::atomic<int64_t> liveBytes{0};
+    rtcSetDeviceMemoryMonitorFunction(
+        device,
+        [](void* user, ssize_t bytes, bool) {
+            static_cast<std::atomic<int64_t>*>(user)->fetch_add(int64_t(bytes), std::memory_order_relaxed);
+            return true;
+        },
+        &liveBytes);
     rtcCommitScene(scene);
+    rtcSetDeviceMemoryMonitorFunction(device, nullptr, nullptr);
+    stats_.memoryBytes = size_t(std::max<int64_t>(0, liveBytes.load()));
 
     RTCBounds b;
     rtcGetSceneBounds(scene, &b);

@@ -1,0 +1,26 @@
+# The `library_consumer` test: install the freshly built Tessera into a scratch prefix, configure and
+# build tests/consumer against it with find_package(Tessera), and run it.
+#   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -DSCENE=... -P run_consumer.cmake
+foreach(var BUILD_DIR SOURCE_DIR WORK_DIR SCENE)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "run_consumer.cmake: ${var} not set")
+  endif()
+endforeach()
+file(REMOVE_RECURSE ${WORK_DIR})
+function(run what)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${what} failed (${rc}):\n${out}\n${err}")
+  endif()
+  message(STATUS "${what}: ok")
+  set(last_output "${out}" PARENT_SCOPE)
+endfunction()
+run("install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/prefix)
+if(NOT EXISTS ${WORK_DIR}/prefix/include/tessera/tessera.h)
+  message(FATAL_ERROR "the install has no include/tessera/tessera.h")
+endif()
+run("configure consumer" ${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/consumer -B ${WORK_DIR}/build
+    -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release)
+run("build consumer" ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+run("run consumer" ${WORK_DIR}/build/consumer ${SCENE})
+message("${last_output}")
