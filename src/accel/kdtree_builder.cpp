@@ -274,8 +274,8 @@ private:
             uint32_t posKey = uint32_t(e >> 30), type = eventType(e), prim = eventPrim(e);
             uint8_t mark;
             if (posKey < splitKey) mark = type == kStart ? kBoth : kLeftOnly;
-            else if (posKey == splitKey) mark = type == kEnd ? kLeftOnly : type == kStart ? kRightOnly : planarInPlane;
-            else mark = type == kEnd ? side[prim] : kRightOnly;
+            else if (posKey == splitKey) mark = type == kEnd ? uint8_t(kLeftOnly) : type == kStart ? uint8_t(kRightOnly) : planarInPlane;
+            else mark = type == kEnd ? side[prim] : uint8_t(kRightOnly);
             side[prim] = mark;
         }
         straddlers_.clear();
