@@ -3,15 +3,17 @@
 #include "accel/brute_force_accel.h"
 #include "accel/bvh_accel.h"
 #include "accel/embree_accel.h"
+#include "accel/kdtree_accel.h"
 #include "core/error.h"
 
 namespace tessera {
 
-std::vector<std::string> accelNames() { return {"embree", "bvh", "brute"}; }
+std::vector<std::string> accelNames() { return {"embree", "bvh", "kdtree", "brute"}; }
 
 std::unique_ptr<Accel> createAccel(std::string_view name, const SceneGeometry& geometry, const AccelOptions& options) {
     if (name == "embree") return std::make_unique<EmbreeAccel>(geometry, options);
     if (name == "bvh") return std::make_unique<BvhAccel>(geometry, options);
+    if (name == "kdtree") return std::make_unique<KdTreeAccel>(geometry, options);
     if (name == "brute") return std::make_unique<BruteForceAccel>(geometry);
     std::string known;
     for (const std::string& n : accelNames()) known += (known.empty() ? "" : ", ") + n;

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <atomic>
 #include <iomanip>
 #include <map>
@@ -15,6 +16,7 @@
 #include <sstream>
 
 #include "accel/bvh_accel.h"
+#include "accel/kdtree_accel.h"
 #include "accel/validate.h"
 #include "app/commands.h"
 #include "core/error.h"
@@ -111,6 +113,56 @@ nlohmann::json configJson(const BvhConfig& c) {
             {"maxSahDepth", c.maxSahDepth}, {"width", 8}, {"leaf", "Triangle4 watertight (Woop 2013)"}};
 }
 
+/// The k-d tree's build statistics (empty for other structures).
+nlohmann::json kdStatsJson(const Accel& accel) {
+    const auto* kd = dynamic_cast<const KdTreeAccel*>(&accel);
+    if (!kd) return nlohmann::json::object();
+    const KdBuildStats& s = kd->buildStats();
+    return {{"innerNodes", s.innerNodes}, {"leaves", s.leaves}, {"emptyLeaves", s.emptyLeaves},
+            {"referencesPerPrimitive", accel.stats().primitives ? double(s.references) / double(accel.stats().primitives) : 0.0},
+            {"maxDepth", s.maxDepth}, {"depthLimit", s.depthLimit}, {"depthLimitHits", s.depthLimitHits},
+            {"retractions", s.retractions}, {"eventsSwept", s.eventsSwept}, {"sahCost", s.sahCost}};
+}
+
+nlohmann::json kdConfigJson(const KdConfig& c) {
+    return {{"traversalCost", c.traversalCost}, {"intersectionCost", c.intersectionCost}, {"sahBlockSize", c.sahBlockSize},
+            {"emptyBonus", c.emptyBonus}, {"emptyCutMinFraction", c.emptyCutMinFraction}, {"maxDepth", c.maxDepth}, {"maxBadRefines", c.maxBadRefines},
+            {"perfectSplits", c.perfectSplits}};
+}
+
+/// `--complexity`: build times only, normalised by N·log2 N (Wald & Havran 2006 claim O(N log N) for
+/// the k-d tree build: the ratio should stay about constant as N grows).
+int runComplexity(const std::vector<std::string>& inputs, const std::vector<std::string>& accels, const AccelOptions& options,
+                  int repeat, bool json) {
+    nlohmann::json rows = nlohmann::json::array();
+    if (!json) std::cout << "structure  primitives  build s (median of " << repeat << ")  ns / (N log2 N)\n";
+    for (const std::string& input : inputs) {
+        std::vector<std::string> warnings;
+        std::optional<CameraDesc> camera;
+        SceneGeometry g = loadGeometryFile(input, camera, warnings);
+        double n = double(g.primitiveCount()), nLogN = n * std::log2(std::max(n, 2.0));
+        for (const std::string& name : accels) {
+            std::vector<double> seconds;
+            nlohmann::json kdStats;
+            for (int rep = 0; rep < repeat; ++rep) {
+                auto accel = createAccel(name, g, options);
+                seconds.push_back(accel->stats().buildSeconds);
+                kdStats = kdStatsJson(*accel);
+            }
+            double s = median(seconds);
+            rows.push_back({{"input", input}, {"structure", name}, {"primitives", g.primitiveCount()}, {"buildSeconds", s},
+                            {"nsPerNLog2N", s / nLogN * 1e9}, {"kdStats", kdStats}});
+            if (!json)
+                std::cout << std::left << std::setw(11) << name << std::setw(12) << g.primitiveCount() << std::fixed
+                          << std::setprecision(3) << std::setw(28) << s << std::setprecision(2) << s / nLogN * 1e9 << "   "
+                          << input << (kdStats.empty() ? std::string() : " " + kdStats.dump()) << "\n";
+        }
+    }
+    if (json) std::cout << nlohmann::json{{"threads", options.threads}, {"repeat", repeat}, {"kdConfig", kdConfigJson(KdConfig{})},
+                                          {"builds", rows}}.dump(2) << std::endl;
+    return 0;
+}
+
 }  // namespace
 
 Runner addBenchAccelCommand(CLI::App& app) {
@@ -119,7 +171,7 @@ Runner addBenchAccelCommand(CLI::App& app) {
         std::string accels = "bvh,embree", rays = "primary,diffuse,shadow";
         int threads = 1, repeat = 5, resolution = 1024;
         uint64_t seed = 1;
-        bool json = false;
+        bool json = false, complexity = false;
     };
     auto opt = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand("bench-accel", "Build time, memory and rays/s of acceleration structures on identical rays");
@@ -131,16 +183,20 @@ Runner addBenchAccelCommand(CLI::App& app) {
     cmd->add_option("--resolution", opt->resolution, "primary rays: a square image of this many pixels a side")->capture_default_str();
     cmd->add_option("--seed", opt->seed, "seed of the diffuse and shadow rays")->capture_default_str();
     cmd->add_flag("--json", opt->json, "print one JSON object instead of text");
+    cmd->add_flag("--complexity", opt->complexity, "build times only, with build time / (N log2 N) per input");
     return [opt] {
         std::vector<std::string> accels = splitList(opt->accels), kinds = splitList(opt->rays);
         for (const std::string& k : kinds)
             if (k != "primary" && k != "diffuse" && k != "shadow") throw InputError("--rays: unknown kind '" + k + "'");
         AccelOptions options;
         options.threads = opt->threads;
+        if (opt->complexity) return runComplexity(opt->inputs, accels, options, opt->repeat, opt->json);
         nlohmann::json report = {{"threads", opt->threads}, {"repeat", opt->repeat}, {"resolution", opt->resolution},
-                                 {"bvhConfig", configJson(BvhConfig{})}, {"inputs", nlohmann::json::array()}};
+                                 {"bvhConfig", configJson(BvhConfig{})},
+                                 {"kdConfig", kdConfigJson(KdConfig{})}, {"inputs", nlohmann::json::array()}};
         if (!opt->json) std::cout << "config: threads " << opt->threads << ", repeat " << opt->repeat << ", bvh "
-                                  << configJson(BvhConfig{}).dump() << "\n";
+                                  << configJson(BvhConfig{}).dump() << ", kdtree "
+                                  << kdConfigJson(KdConfig{}).dump() << "\n";
         for (const std::string& input : opt->inputs) {
             std::vector<std::string> warnings;
             std::optional<CameraDesc> camera;
@@ -153,11 +209,13 @@ Runner addBenchAccelCommand(CLI::App& app) {
             std::map<std::string, std::vector<double>> buildSeconds;
             std::map<std::string, std::map<std::string, std::vector<double>>> mrays;
             std::map<std::string, AccelStats> stats;
+            std::map<std::string, nlohmann::json> kdStats;
             size_t checksum = 0;
             for (int rep = 0; rep < opt->repeat; ++rep) {
                 for (const std::string& name : accels) {  // interleaved: each repeat runs every structure
                     auto accel = createAccel(name, g, options);
                     stats[name] = accel->stats();
+                    kdStats[name] = kdStatsJson(*accel);
                     buildSeconds[name].push_back(accel->stats().buildSeconds);
                     for (const std::string& kind : kinds) {
                         const std::vector<Ray>& set = rays.get(kind);
@@ -190,6 +248,10 @@ Runner addBenchAccelCommand(CLI::App& app) {
                         s["ratioToEmbree"][kind] = ratio;
                         line << " (" << ratio << "x)";
                     }
+                }
+                if (!kdStats[name].empty()) {
+                    s["kdStats"] = kdStats[name];
+                    line << "\n           " << kdStats[name].dump();
                 }
                 entry["structures"][name] = s;
                 if (!opt->json) std::cout << line.str() << "\n";

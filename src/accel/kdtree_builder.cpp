@@ -1,0 +1,406 @@
+#include "accel/kdtree_builder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+
+#include "core/error.h"
+
+namespace tessera {
+
+float KdNode::split() const {
+    float f;
+    std::memcpy(&f, &word0, 4);
+    return f;
+}
+
+KdNode KdNode::inner(int axis, float split, uint32_t aboveChild) {
+    KdNode n;
+    std::memcpy(&n.word0, &split, 4);
+    n.word1 = aboveChild << 2 | uint32_t(axis);
+    return n;
+}
+
+KdNode KdNode::leaf(uint32_t first, uint32_t payload) {
+    KdNode n;
+    n.word0 = first;
+    n.word1 = payload << 2 | 3u;
+    return n;
+}
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Events. One 64-bit integer each, so that sorting, merging and comparing are integer operations:
+//   bits 62..63 axis | bits 30..61 position (order-preserving bits of the float) | bits 28..29 type
+//   | bits 0..27 primitive.
+// Sorting by the whole key orders events by axis, then position, then type end < planar < start
+// (the order the sweep needs, W&H Section 4.2), then primitive (determinism). One sorted list per
+// node holds the three axes one after another.
+// ---------------------------------------------------------------------------------------------
+using Event = uint64_t;
+constexpr int kPrimBits = 28;
+constexpr uint32_t kPrimMask = (1u << kPrimBits) - 1u;
+enum EventType : uint32_t { kEnd = 0, kPlanar = 1, kStart = 2 };
+
+inline uint32_t sortableBits(float f) {
+    if (f == 0.f) f = 0.f;  // −0.0 and +0.0 are one plane: float and key comparisons must agree
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+inline float fromSortableBits(uint32_t s) {
+    uint32_t u = (s & 0x80000000u) ? (s & 0x7fffffffu) : ~s;
+    float f;
+    std::memcpy(&f, &u, 4);
+    return f;
+}
+inline Event makeEvent(int axis, float pos, EventType type, uint32_t prim) {
+    return uint64_t(axis) << 62 | uint64_t(sortableBits(pos)) << 30 | uint64_t(type) << kPrimBits | prim;
+}
+inline int eventAxis(Event e) { return int(e >> 62); }
+inline float eventPos(Event e) { return fromSortableBits(uint32_t(e >> 30)); }
+inline uint32_t eventType(Event e) { return uint32_t(e >> kPrimBits) & 3u; }
+inline uint32_t eventPrim(Event e) { return uint32_t(e) & kPrimMask; }
+/// Axis and position: equal for all events of one candidate plane.
+inline uint64_t eventPlane(Event e) { return e >> 30; }
+
+/// The events of one primitive box: start/end per axis, or one planar event where it is flat.
+template <typename Out>
+inline void appendEvents(const Bounds3f& b, uint32_t prim, Out& out) {
+    for (int a = 0; a < 3; ++a) {
+        if (b.lower[a] == b.upper[a]) {
+            out.push_back(makeEvent(a, b.lower[a], kPlanar, prim));
+        } else {
+            out.push_back(makeEvent(a, b.lower[a], kStart, prim));
+            out.push_back(makeEvent(a, b.upper[a], kEnd, prim));
+        }
+    }
+}
+
+/// Stable LSD radix sort on the key bits above the primitive (axis, position, type): 3 passes of
+/// 12 bits. Events are generated in primitive order, so the result is sorted by the whole key.
+void radixSortEvents(std::vector<Event>& events) {
+    std::vector<Event> tmp(events.size());
+    constexpr int kBits = 12;
+    constexpr size_t kBuckets = size_t(1) << kBits;
+    std::vector<size_t> count(kBuckets);
+    for (int shift = kPrimBits; shift < 64; shift += kBits) {
+        std::fill(count.begin(), count.end(), 0);
+        for (Event e : events) ++count[(e >> shift) & (kBuckets - 1)];
+        size_t sum = 0;
+        for (size_t& c : count) {
+            size_t n = c;
+            c = sum;
+            sum += n;
+        }
+        for (Event e : events) tmp[count[(e >> shift) & (kBuckets - 1)]++] = e;
+        events.swap(tmp);
+    }
+}
+
+/// A node's sorted events. Not a std::vector: children's lists are written once by a merge, and
+/// value-initialising them first would cost a pass over every event of every level.
+struct EventList {
+    std::unique_ptr<Event[]> data;
+    size_t size = 0;
+    void allocate(size_t n) {
+        data.reset(n ? new Event[n] : nullptr);
+        size = n;
+    }
+    void release() {
+        data.reset();
+        size = 0;
+    }
+    const Event* begin() const { return data.get(); }
+    const Event* end() const { return data.get() + size; }
+    Event operator[](size_t i) const { return data[i]; }
+};
+
+enum Side : uint8_t { kBoth = 0, kLeftOnly = 1, kRightOnly = 2 };
+
+struct SplitCandidate {
+    float cost = std::numeric_limits<float>::infinity();
+    int axis = -1;
+    float pos = 0.f;
+    bool planarLeft = false;
+};
+
+class KdBuilder {
+public:
+    KdBuilder(std::span<const Bounds3f> bounds, const KdClipFunction& clip, const KdConfig& config, KdTree& out)
+        : bounds_(bounds), clip_(clip), config_(config), out_(out), side_(bounds.size(), kBoth) {
+        invBlockSize_ = 1.f / float(std::max(1, config.sahBlockSize));
+    }
+
+    /// Builds the subtree of `cell` from its sorted events (consumed); returns its expected cost
+    /// relative to the cell's area (leaf: C_isect·B(N); inner: C_trav + P_L·C_L + P_R·C_R).
+    double build(EventList& events, uint32_t count, const Bounds3f& cell, int depth, int badRefines) {
+        out_.stats.maxDepth = std::max(out_.stats.maxDepth, depth);
+        const float leafCost = config_.intersectionCost * blocks(count);
+        if (count == 0) return makeLeaf(events, 0);
+        if (depth >= out_.stats.depthLimit) {
+            ++out_.stats.depthLimitHits;
+            return makeLeaf(events, count);
+        }
+        size_t segment[4];
+        out_.stats.eventsSwept += events.size;
+        SplitCandidate best = findSplit(events, count, cell, segment);
+        // pbrt-v3's termination: a split worse than a leaf is allowed a few times along a path.
+        bool bad = best.cost >= leafCost;
+        if (bad) ++badRefines;
+        if (best.axis < 0 || (bad && (badRefines > config_.maxBadRefines || (best.cost > 4.f * leafCost && count < 16))))
+            return makeLeaf(events, count);
+
+        // A bad refinement may be retracted: keep its primitives until the subtree is known.
+        std::vector<uint32_t> retractPrims;
+        if (bad) retractPrims = primsOf(events);
+
+        Bounds3f leftCell = cell, rightCell = cell;
+        leftCell.upper[best.axis] = best.pos;
+        rightCell.lower[best.axis] = best.pos;
+        EventList left, right;
+        uint32_t leftCount = 0, rightCount = 0;
+        split(events, segment, best, leftCell, rightCell, left, right, leftCount, rightCount);
+
+        uint32_t nodeIndex = uint32_t(out_.nodes.size());
+        size_t primMark = out_.primIndices.size();
+        size_t leavesMark = out_.stats.leaves, emptyMark = out_.stats.emptyLeaves, refMark = out_.stats.references;
+        size_t innerMark = out_.stats.innerNodes;
+        out_.nodes.emplace_back();
+        ++out_.stats.innerNodes;
+        double costL = build(left, leftCount, leftCell, depth + 1, badRefines);
+        uint32_t above = uint32_t(out_.nodes.size());
+        double costR = build(right, rightCount, rightCell, depth + 1, badRefines);
+        out_.nodes[nodeIndex] = KdNode::inner(best.axis, best.pos, above);
+
+        double area = cell.surfaceArea();
+        double cost = config_.traversalCost +
+                      (leftCell.surfaceArea() * costL + rightCell.surfaceArea() * costR) / area;
+        if (bad && cost >= leafCost) {
+            // The refinement did not pay: retract the whole subtree into one leaf.
+            out_.nodes.resize(nodeIndex);
+            out_.primIndices.resize(primMark);
+            out_.stats.leaves = leavesMark, out_.stats.emptyLeaves = emptyMark, out_.stats.references = refMark;
+            out_.stats.innerNodes = innerMark;
+            ++out_.stats.retractions;
+            return emitLeaf(retractPrims);
+        }
+        return cost;
+    }
+
+private:
+    /// B(n) = max(1, n / sahBlockSize) for n > 0: a leaf test costs one SIMD block at least, and
+    /// grows linearly beyond. (⌈n / sahBlockSize⌉ jumps at multiples of the block size, and then a
+    /// split that duplicates almost every reference, 9 → 8 + 8, looks cheaper than a leaf.)
+    float blocks(uint32_t n) const { return n == 0 ? 0.f : std::max(1.f, float(n) * invBlockSize_); }
+
+    /// One sweep over the sorted events of all three axes (W&H Algorithm 4, "FindPlane"): at each
+    /// plane, N_L counts primitives entirely or partly before it, N_P those lying in it, N_R those
+    /// after it; each candidate is evaluated with the planar primitives on either side.
+    SplitCandidate findSplit(const EventList& events, uint32_t count, const Bounds3f& cell, size_t segment[4]) const {
+        SplitCandidate best;
+        const Vec3f d = cell.diagonal();
+        const float area = cell.surfaceArea();
+        segment[0] = 0;
+        segment[1] = segment[2] = segment[3] = events.size;
+        if (!(area > 0.f)) return best;  // a cell flat on two axes: no area to split
+        const float invArea = 1.f / area;
+        const float kt = config_.traversalCost, ki = config_.intersectionCost;
+        const float lambdaEmpty = 1.f - config_.emptyBonus;
+        int axis = -1;
+        uint32_t nl = 0, nr = 0;
+        float lo = 0.f, hi = 0.f, crossArea = 0.f, perimeter = 0.f;
+        const size_t n = events.size;
+        size_t i = 0;
+        while (i < n) {
+            Event e = events[i];
+            int a = eventAxis(e);
+            if (a != axis) {
+                for (int s = axis + 1; s <= a; ++s) segment[s] = i;
+                axis = a;
+                nl = 0, nr = count;
+                lo = cell.lower[a], hi = cell.upper[a];
+                int b = (a + 1) % 3, c = (a + 2) % 3;
+                crossArea = d[b] * d[c];
+                perimeter = d[b] + d[c];
+            }
+            uint64_t plane = eventPlane(e);
+            uint32_t typeCount[3] = {0, 0, 0};
+            while (i < n && eventPlane(events[i]) == plane) ++typeCount[eventType(events[i++])];
+            uint32_t np = typeCount[kPlanar];
+            nr -= typeCount[kPlanar] + typeCount[kEnd];
+            float p = eventPos(e);
+            if (p > lo && p < hi) {
+                // Children's areas: 2·(len·(d_b + d_c) + d_b·d_c); flat cells (d = 0) are fine.
+                float pl = 2.f * ((p - lo) * perimeter + crossArea) * invArea;
+                float pr = 2.f * ((hi - p) * perimeter + crossArea) * invArea;
+                const float minEmpty = config_.emptyCutMinFraction * (hi - lo);
+                const bool thickLeft = p - lo >= minEmpty, thickRight = hi - p >= minEmpty;
+                auto sah = [&](uint32_t cl, uint32_t cr) {
+                    float c = kt + ki * (pl * blocks(cl) + pr * blocks(cr));
+                    return ((cl == 0 && thickLeft) || (cr == 0 && thickRight)) ? lambdaEmpty * c : c;
+                };
+                float costLeft = sah(nl + np, nr), costRight = sah(nl, nr + np);
+                // Planar primitives go to the cheaper side (W&H Section 3.3).
+                if (costLeft < best.cost) best = {costLeft, a, p, true};
+                if (costRight < best.cost) best = {costRight, a, p, false};
+            }
+            nl += typeCount[kStart] + typeCount[kPlanar];
+        }
+        for (int s = axis + 1; s <= 3; ++s) segment[s] = n;
+        return best;
+    }
+
+    /// Classifies the primitives (W&H Algorithm 5), splits the sorted event list stably into the
+    /// children's lists and merges in the freshly sorted events of the straddling primitives,
+    /// clipped to each child cell (W&H Section 4.3). Consumes `events`.
+    void split(EventList& events, const size_t segment[4], const SplitCandidate& s, const Bounds3f& leftCell,
+               const Bounds3f& rightCell, EventList& left, EventList& right, uint32_t& leftCount,
+               uint32_t& rightCount) {
+        const size_t begin = segment[s.axis], end = segment[s.axis + 1];
+        // One pass over the split axis's events, in position order (W&H Algorithm 5 folded): a start
+        // before the plane marks its primitive as straddling until its end event, if also at or
+        // before the plane, marks it left; a start at or after the plane marks it right; planar
+        // events go by position, those in the plane by the SAH's choice. Ends after the plane leave
+        // the mark alone (their primitive straddles or was marked right by its start).
+        const uint32_t splitKey = sortableBits(s.pos);
+        uint8_t* side = side_.data();
+        const uint8_t planarInPlane = s.planarLeft ? kLeftOnly : kRightOnly;
+        for (size_t i = begin; i < end; ++i) {
+            Event e = events[i];
+            uint32_t posKey = uint32_t(e >> 30), type = eventType(e), prim = eventPrim(e);
+            uint8_t mark;
+            if (posKey < splitKey) mark = type == kStart ? kBoth : kLeftOnly;
+            else if (posKey == splitKey) mark = type == kEnd ? uint8_t(kLeftOnly) : type == kStart ? uint8_t(kRightOnly) : planarInPlane;
+            else mark = type == kEnd ? side[prim] : uint8_t(kRightOnly);
+            side[prim] = mark;
+        }
+        straddlers_.clear();
+        leftCount = rightCount = 0;
+        for (size_t i = begin; i < end; ++i) {
+            Event e = events[i];
+            if (eventType(e) == kEnd) continue;
+            uint32_t prim = eventPrim(e);
+            Side side = Side(side_[prim]);
+            if (side == kLeftOnly) ++leftCount;
+            else if (side == kRightOnly) ++rightCount;
+            else straddlers_.push_back(prim);
+        }
+        // Stable partition without branches: every event is written to both lists, and only the
+        // cursor of its side advances (straddlers advance neither: their events are regenerated).
+        if (keptLeft_.size() < events.size) keptLeft_.resize(events.size), keptRight_.resize(events.size);
+        size_t nLeft = 0, nRight = 0;
+        Event* keptL = keptLeft_.data();
+        Event* keptR = keptRight_.data();
+        for (Event e : events) {
+            uint8_t sd = side[eventPrim(e)];
+            keptL[nLeft] = e;
+            keptR[nRight] = e;
+            nLeft += sd == kLeftOnly;
+            nRight += sd == kRightOnly;
+        }
+        events.release();  // the parent's list is no longer needed
+
+        newLeft_.clear(), newRight_.clear();
+        for (uint32_t prim : straddlers_) {
+            Bounds3f bl = clipped(prim, leftCell), br = clipped(prim, rightCell);
+            if (!bl.empty()) appendEvents(bl, prim, newLeft_), ++leftCount;
+            if (!br.empty()) appendEvents(br, prim, newRight_), ++rightCount;
+        }
+        std::sort(newLeft_.begin(), newLeft_.end());
+        std::sort(newRight_.begin(), newRight_.end());
+        left.allocate(nLeft + newLeft_.size());
+        std::merge(keptL, keptL + nLeft, newLeft_.begin(), newLeft_.end(), left.data.get());
+        right.allocate(nRight + newRight_.size());
+        std::merge(keptR, keptR + nRight, newRight_.begin(), newRight_.end(), right.data.get());
+    }
+
+    /// The primitive clipped to the cell (perfect split), always within the cell.
+    Bounds3f clipped(uint32_t prim, const Bounds3f& cell) const {
+        Bounds3f b = (config_.perfectSplits && clip_) ? clip_(prim, cell) : bounds_[prim];
+        b.lower = glm::max(b.lower, cell.lower);
+        b.upper = glm::min(b.upper, cell.upper);
+        return b;
+    }
+
+    std::vector<uint32_t> primsOf(const EventList& events) const {
+        std::vector<uint32_t> prims;
+        for (Event e : events) {
+            if (eventAxis(e) != 0) break;
+            if (eventType(e) != kEnd) prims.push_back(eventPrim(e));
+        }
+        return prims;
+    }
+
+    double makeLeaf(EventList& events, uint32_t count) {
+        std::vector<uint32_t> prims = primsOf(events);
+        events.release();
+        (void)count;
+        return emitLeaf(prims);
+    }
+
+    double emitLeaf(std::vector<uint32_t>& prims) {
+        // Primitive order inside a leaf: ascending ids, so leaf blocks do not depend on event order.
+        std::sort(prims.begin(), prims.end());
+        out_.nodes.push_back(KdNode::leaf(uint32_t(out_.primIndices.size()), uint32_t(prims.size())));
+        out_.primIndices.insert(out_.primIndices.end(), prims.begin(), prims.end());
+        ++out_.stats.leaves;
+        out_.stats.references += prims.size();
+        if (prims.empty()) ++out_.stats.emptyLeaves;
+        return config_.intersectionCost * blocks(uint32_t(prims.size()));
+    }
+
+    std::span<const Bounds3f> bounds_;
+    const KdClipFunction& clip_;
+    KdConfig config_;
+    KdTree& out_;
+    float invBlockSize_ = 1.f;
+    std::vector<uint8_t> side_;
+    std::vector<uint32_t> straddlers_;
+    std::vector<Event> keptLeft_, keptRight_, newLeft_, newRight_;
+};
+
+}  // namespace
+
+KdTree buildKdTree(std::span<const Bounds3f> primBounds, const KdClipFunction& clip, const KdConfig& config) {
+    KdTree tree;
+    if (primBounds.size() > kPrimMask)
+        throw InputError("k-d tree: " + std::to_string(primBounds.size()) + " primitives exceed the limit of " +
+                         std::to_string(kPrimMask));
+    for (const Bounds3f& b : primBounds) tree.bounds.extend(b);
+    size_t n = primBounds.size();
+    int limit = config.maxDepth > 0 ? config.maxDepth
+                                    : int(std::lround(8.0 + 1.3 * std::log2(double(std::max<size_t>(n, 1)))));
+    tree.stats.depthLimit = std::clamp(limit, 0, kKdMaxDepth);
+    if (n == 0) return tree;
+
+    std::vector<Event> events;
+    events.reserve(6 * n);
+    // Per axis, in primitive order: the radix sort is stable, so equal keys stay by primitive.
+    for (int a = 0; a < 3; ++a)
+        for (uint32_t i = 0; i < n; ++i) {
+            const Bounds3f& b = primBounds[i];
+            if (b.lower[a] == b.upper[a]) {
+                events.push_back(makeEvent(a, b.lower[a], kPlanar, i));
+            } else {
+                events.push_back(makeEvent(a, b.lower[a], kStart, i));
+                events.push_back(makeEvent(a, b.upper[a], kEnd, i));
+            }
+        }
+    radixSortEvents(events);
+
+    EventList root;
+    root.allocate(events.size());
+    std::copy(events.begin(), events.end(), root.data.get());
+    std::vector<Event>().swap(events);
+    KdBuilder builder(primBounds, clip, config, tree);
+    tree.stats.sahCost = builder.build(root, uint32_t(n), tree.bounds, 0, 0);
+    tree.nodes.shrink_to_fit();
+    tree.primIndices.shrink_to_fit();
+    return tree;
+}
+
+}  // namespace tessera

