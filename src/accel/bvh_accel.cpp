@@ -111,7 +111,8 @@ struct TriangleCandidate {
 
 /// Watertight test of one ray against four triangles (Woop et al. 2013, Fig. 1/Listing 1, four lanes
 /// at once). Returns the nearest lane hit in (tMin, tMax), or lane −1.
-TESSERA_INLINE TriangleCandidate intersectTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
+template <bool kAnyHit>
+TESSERA_INLINE TriangleCandidate intersectTriangle4Impl(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
     const int kx = r.kx, ky = r.ky, kz = r.kz;
     const Vf4 ox = r.ox, oy = r.oy, oz = r.oz, sx = r.sx, sy = r.sy, sz = r.sz;
     Vf4 aX = load4(tri.p[0][kx]) - ox, aY = load4(tri.p[0][ky]) - oy, aZ = load4(tri.p[0][kz]) - oz;
@@ -144,6 +145,9 @@ TESSERA_INLINE TriangleCandidate intersectTriangle4(const TriRay& r, const BvhAc
     Vf4 t = T * invDet;
     valid &= (t > splat4(r.tMin)) & (t < splat4(tMax));
     uint32_t bits = moveMask4(valid);
+    // Any-hit queries only need to know that some lane hit (same arithmetic, so the same answer
+    // as the closest-hit test): no serial search for the nearest lane, no barycentrics.
+    if constexpr (kAnyHit) return {0.f, 0.f, 0.f, bits ? __builtin_ctz(bits) : -1};
     TriangleCandidate best{tMax, 0.f, 0.f, -1};
     while (bits) {
         int i = __builtin_ctz(bits);
@@ -151,6 +155,13 @@ TESSERA_INLINE TriangleCandidate intersectTriangle4(const TriRay& r, const BvhAc
         if (t[i] < best.t) best = {t[i], V[i] * invDet[i], W[i] * invDet[i], i};
     }
     return best;
+}
+
+TESSERA_INLINE TriangleCandidate intersectTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
+    return intersectTriangle4Impl<false>(r, tri, tMax);
+}
+TESSERA_INLINE bool occludedTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
+    return intersectTriangle4Impl<true>(r, tri, tMax).lane >= 0;
 }
 
 Bounds3f paddedSphereBounds(const Sphere& s) {
@@ -487,7 +498,7 @@ TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
         } else if (!(ref & kMixedBit)) {
             uint32_t first = (ref & ~kLeafBit) >> 2, blocks = (ref & 3u) + 1;
             for (uint32_t b = 0; b < blocks; ++b)
-                if (intersectTriangle4(triRay, triangles_[first + b], tMax).lane >= 0) return true;
+                if (occludedTriangle4(triRay, triangles_[first + b], tMax)) return true;
         } else {
             uint32_t first = (ref & ~(kLeafBit | kMixedBit)) >> 4, count = ref & 15u;
             for (uint32_t k = 0; k < count; ++k) {
