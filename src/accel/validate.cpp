@@ -68,7 +68,7 @@ bool planeHit(const Ray& r, const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, d
 }
 
 /// Distance between the line o + s·d and the segment [a, b], in double precision.
-double lineSegmentDistance(const Vec3d& o, const Vec3d& d, const Vec3d& a, const Vec3d& b) {
+double lineSegmentDistance(const Vec3d& o, const Vec3d& d, const Vec3d& a, const Vec3d& b, double* rayT = nullptr) {
     Vec3d e = b - a, w0 = a - o;
     double dd = glm::dot(d, d), ee = glm::dot(e, e), de = glm::dot(d, e), dw = glm::dot(d, w0), ew = glm::dot(e, w0);
     double den = dd * ee - de * de;
@@ -76,6 +76,7 @@ double lineSegmentDistance(const Vec3d& o, const Vec3d& d, const Vec3d& a, const
     s = std::clamp(s, 0.0, 1.0);
     Vec3d q = a + s * e;
     double lineS = glm::dot(q - o, d) / dd;
+    if (rayT) *rayT = lineS;
     return glm::length(o + lineS * d - q);
 }
 
@@ -112,14 +113,22 @@ PrimCheck checkPrimitive(const SceneGeometry& g, const Ray& r, uint32_t geomId, 
         bool plane = planeHit(r, p[0], p[1], p[2], t, b1, b2);
         c.t = plane ? t : -1.0;
         c.slack = edgeUlps * 0x1p-24 * (scale + (plane ? std::abs(t) * dLen : 0.0)) * conditionNumber(p[0], p[1], p[2]);
-        double edgeDist = std::min({lineSegmentDistance(o, d, p[0], p[1]), lineSegmentDistance(o, d, p[1], p[2]),
-                                    lineSegmentDistance(o, d, p[2], p[0])});
+        double edgeDist = kInfinity, edgeT = 0.0;
+        for (int e = 0; e < 3; ++e) {
+            double rayT;
+            double dist = lineSegmentDistance(o, d, p[e], p[(e + 1) % 3], &rayT);
+            if (dist < edgeDist) edgeDist = dist, edgeT = rayT;
+        }
         c.nearBoundary = edgeDist <= c.slack;
         if (!plane) {
             // Parallel to the plane: only touching an edge counts, at the closest approach.
-            if (c.nearBoundary) c.t = glm::dot(p[0] - o, d) / (dLen * dLen);
+            if (c.nearBoundary) c.t = edgeT;
             return c;
         }
+        // A ray grazing an edge or vertex is hit there: the plane intersection is ill-conditioned
+        // when the ray lies (nearly) in the triangle's plane — an edge-on triangle touched at a
+        // vertex it shares with the triangle the reference reports — and would put t anywhere.
+        if (c.nearBoundary) c.t = edgeT;
         bool inside = b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0;
         c.hitInside = inside && !c.nearBoundary;
         if (!inside && !c.nearBoundary) c.t = -1.0;
