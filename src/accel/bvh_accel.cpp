@@ -477,22 +477,22 @@ TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
     uint32_t ref = 0;
     while (true) {
         if (!(ref & kLeafBit)) {
-            // Nearest child first here too: an occluder is usually close to the shadow ray's
-            // origin (the surface it leaves), so the near subtree ends the query soonest.
+            // No ordering for any-hit queries (as in Embree's any-hit traversal): comparing entry
+            // distances cost more than it saved; on the dragon's shadow rays skipping it measured
+            // 0.58–0.60× → 0.74–0.77× of Embree's rate (chrt'd A/B runs, same process pairs).
             const Node8& node = nodes_[ref];
             Vf8 tNear;
             uint32_t mask = moveMask8(boxRay.test(node, tMax, tNear));
             if (mask) {
-                int nearest = __builtin_ctz(mask);
+                int first = __builtin_ctz(mask);
                 mask &= mask - 1;
                 while (mask) {
                     int i = __builtin_ctz(mask);
                     mask &= mask - 1;
-                    if (tNear[i] < tNear[nearest]) std::swap(i, nearest);
                     stack[sp++] = node.child[i];
                     prefetchChild(node.child[i]);
                 }
-                ref = node.child[nearest];
+                ref = node.child[first];
                 continue;
             }
         } else if (!(ref & kMixedBit)) {
