@@ -546,10 +546,11 @@ def ring_caustic():
     g.quads("plane", [floor_quad(4.0)[0]], lambda q: (0.0, 1.0, 0.0), plane)
     pos, tris = ring_mesh()
     g.add("nodes", {"name": "ring", "mesh": g.mesh("ring", pos, tris, metal)})
-    # 25 degrees above the plane, 4 units from the ring's axis.
-    elev = math.radians(25.0)
+    # 15 degrees above the plane, 4 units from the ring's axis: low enough that light reflected
+    # off the far inner wall travels far enough across the plane to form the cusp (at R/2).
+    elev = math.radians(15.0)
     g.sphere("light", (-4.0 * math.cos(elev), 4.0 * math.sin(elev), 0.0), 0.06, light)
-    eye, target = (0.9, 2.6, 1.5), (0.15, 0.0, 0.0)
+    eye, target = (0.6, 3.4, 2.0), (0.1, 0.0, 0.0)
     g.camera("camera", yfov=math.radians(38.0), aspect=4.0 / 3.0, znear=0.01,
              translation=eye, rotation=look_at_rotation(eye, target))
     g.render((320, 240), 64, -1, 0, "bdpt")
@@ -595,23 +596,26 @@ def dragon(glass):
 def veach_mis():
     g = Gltf("Veach's MIS scene: four glossy plates of increasing roughness lit by four sphere "
              "lights of decreasing size and matched power, in front of a diffuse wall.")
-    eye, target = (0.0, 2.0, 15.0), (0.0, -2.0, 2.5)
+    eye = (0.0, 2.0, 15.0)
+    target = (0.0, eye[1] - 15.0 * math.tan(math.radians(15.0)), 0.0)  # 15 degrees down
     lights = [(-3.75, 0.9), (-1.25, 0.3), (1.25, 0.1), (3.75, 0.03)]  # (x, radius)
     # Equal power: radiance x area constant, radiance 1 at radius 0.9 -> (0.9 / r)^2.
     for i, (x, r) in enumerate(lights):
         mat = g.material("light %d" % i, emission=((1.0, 1.0, 1.0), round((0.9 / r) ** 2, 6)))
         g.sphere("light %d" % i, (x, 0.0, 0.0), r, mat)
-    # Plates: GGX alpha = roughness^2 = 0.005, 0.02, 0.05, 0.1 (sharp at the front).
-    for i, (y, z, alpha) in enumerate([(-3.6, 0.9, 0.1), (-3.3, 1.9, 0.05),
-                                       (-2.95, 2.9, 0.02), (-2.55, 3.9, 0.005)]):
+    # Plates: GGX alpha = roughness^2 = 0.1, 0.05, 0.02, 0.005 from the back (top of the image) to
+    # the front; each centred on its own view ray (depression angle below the horizon) so the four
+    # occupy separate bands of the image, stepping down towards the camera like Veach's.
+    for i, (depression, z, alpha) in enumerate([(12.0, 0.5, 0.1), (16.0, 1.7, 0.05),
+                                                (20.0, 2.9, 0.02), (24.0, 4.1, 0.005)]):
         mat = g.material("plate %d" % i, base=(0.85, 0.85, 0.85), metallic=1.0,
                          roughness=round(math.sqrt(alpha), 6))
-        c = (0.0, y, z)
+        c = (0.0, eye[1] - (eye[2] - z) * math.tan(math.radians(depression)), z)
         # Tilt each plate so the mirror direction from the camera through its
         # centre points at the row of lights (half vector).
         n = normalize(add(normalize(sub(eye, c)), normalize(sub((0.0, 0.0, 0.0), c))))
         t = normalize(cross((1.0, 0.0, 0.0), n))  # in-plane, across the plate
-        half_w, half_d = 4.0, 0.45
+        half_w, half_d = 4.0, 0.7
         q = [add(c, add(scale((1.0, 0.0, 0.0), sx * half_w), scale(t, sy * half_d)))
              for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
         g.quads("plate %d" % i, [q], lambda qq, n=n: n, mat)
@@ -631,7 +635,7 @@ def door_ajar():
              "all light seen reaches the camera through the gap (Veach's door scene).")
     white = g.material("white", base=(0.7, 0.7, 0.7))
     door_mat = g.material("door", base=(0.55, 0.4, 0.3))
-    light = g.material("light", emission=((1.0, 0.92, 0.8), 60.0))
+    light = g.material("light", emission=((1.0, 0.92, 0.8), 200.0))
     X0, X1, H, Z1 = -3.0, 4.0, 2.5, 4.0      # room B: x < 0, room A (camera): x > 0
     DZ0, DZ1, DH = 1.5, 2.4, 2.0             # door opening in the x = 0 wall
     room = box_quads((X0, 0.0, 0.0), (X1, H, Z1))

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "core/error.h"
+#include "scene/mesh_loader.h"
 
 namespace tessera {
 namespace {
@@ -301,6 +302,8 @@ private:
             readPunctualLight(it->second, world, el + ".extensions.KHR_lights_punctual");
         if (auto it = node.extensions.find("TESSERA_sphere"); it != node.extensions.end())
             readSphere(it->second, world, el + ".extensions.TESSERA_sphere");
+        if (auto it = node.extensions.find("TESSERA_asset_mesh"); it != node.extensions.end())
+            readAssetMesh(it->second, world, el + ".extensions.TESSERA_asset_mesh");
         for (int c : node.children) visitNode(c, world, depth + 1);
     }
 
@@ -387,6 +390,62 @@ private:
         s.materialId = materialId;
         if (!(s.radius > 0.f) || !std::isfinite(s.radius) || !isFinite(s.center)) fail(el, "sphere is degenerate after its transform");
         scene_.geometry.spheres.push_back(s);
+    }
+
+    /// TESSERA_asset_mesh {asset, material}: a mesh file too large to commit, looked up by name in the
+    /// asset folders only (scene/assets.h), so the scene's folder confinement still holds.
+    void readAssetMesh(const gl::Value& v, const Mat4d& world, const std::string& el) {
+        if (!v.IsObject() || !v.Has("asset") || !v.Get("asset").IsString()) fail(el, "needs an 'asset' name (string)");
+        std::string name = v.Get("asset").Get<std::string>();
+        if (!isValidAssetName(name))
+            fail(el, "asset name '" + name + "' must be a relative path of [A-Za-z0-9._-] components without '..'");
+        uint32_t materialId = defaultMaterial_;
+        if (v.Has("material")) {
+            double mat = number(v, "material", el, -1.0);
+            if (!(mat >= 0 && mat < double(model_.materials.size())) || mat != std::floor(mat))
+                fail(el, "'material' must index materials[]");
+            materialId = uint32_t(mat);
+        }
+        std::optional<std::string> file = resolveAsset(name, options_.assetRoots);
+        if (!file) {
+            std::string roots;
+            for (const std::string& r : options_.assetRoots) roots += (roots.empty() ? "" : ", ") + r;
+            fail(el, "asset '" + name + "' not found in the asset folders (" + (roots.empty() ? "none" : roots) +
+                         "); run tools/fetch_assets.sh or set TESSERA_ASSETS");
+        }
+        std::error_code ec;
+        uint64_t size = std::filesystem::file_size(*file, ec);
+        if (ec || size > options_.maxFileBytes) fail(el, "asset '" + *file + "' is unreadable or over the file-size limit");
+        std::string lower = name;
+        for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+        auto endsWith = [&](const char* suffix) {
+            std::string s(suffix);
+            return lower.size() >= s.size() && lower.compare(lower.size() - s.size(), s.size(), s) == 0;
+        };
+        TriangleMesh mesh;
+        if (endsWith(".ply") || endsWith(".ply.gz")) mesh = loadPlyMesh(*file);
+        else if (endsWith(".obj")) mesh = loadObjMesh(*file);
+        else fail(el, "asset '" + name + "': only .ply, .ply.gz and .obj meshes are supported");
+        mesh.name = name + " (" + el + ")";
+        mesh.materialId = materialId;
+        mesh.normals.clear();  // flat shading: the loaders' normals (if any) are not transformed here
+        bool flipWinding = glm::determinant(Mat4d(world)) < 0.0;
+        for (Vec3f& p : mesh.positions) p = Vec3f(world * glm::dvec4(Vec3d(p), 1.0));
+        std::vector<glm::uvec3> kept;
+        kept.reserve(mesh.triangles.size());
+        for (glm::uvec3 t : mesh.triangles) {
+            if (flipWinding) std::swap(t.y, t.z);
+            const Vec3f &a = mesh.positions[t.x], &b = mesh.positions[t.y], &c = mesh.positions[t.z];
+            Vec3f n = glm::cross(b - a, c - a);
+            if (!isFinite(a) || !isFinite(b) || !isFinite(c) || !(glm::dot(n, n) > 0.f) || !isFinite(n)) {
+                ++droppedTriangles_;
+                continue;
+            }
+            kept.push_back(t);
+        }
+        if (kept.empty()) fail(el, "asset '" + name + "' has no usable triangles");
+        mesh.triangles = std::move(kept);
+        scene_.geometry.meshes.push_back(std::move(mesh));
     }
 
     /// Byte view of accessor `a` after checking type, bounds and layout.
@@ -540,7 +599,7 @@ private:
 
 std::vector<std::string> supportedGltfExtensions() {
     return {"KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior",
-            "TESSERA_render", "TESSERA_sphere", "TESSERA_thin_lens"};
+            "TESSERA_render", "TESSERA_sphere", "TESSERA_thin_lens", "TESSERA_asset_mesh"};
 }
 
 Scene loadGltfScene(const std::string& path, std::vector<std::string>& warnings) {

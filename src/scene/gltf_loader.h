@@ -4,6 +4,8 @@
 ///   TESSERA_render (root): render defaults {resolution [w,h], spp, maxDepth, seed, integrator}
 ///   TESSERA_sphere (node): analytic sphere {radius, material} centred at the node's origin
 ///   TESSERA_thin_lens (camera): {apertureRadius, focusDistance}
+///   TESSERA_asset_mesh (node): {asset, material}: a PLY (.gz too) or OBJ mesh that is not committed,
+///     named relative to the asset folders (scene/assets.h), placed by the node's transform
 /// Material mapping (model no more than the scenes need): KHR_materials_transmission > 0 → smooth
 /// dielectric (KHR_materials_ior, default 1.5); metallicFactor ≥ 0.5 → mirror (roughness 0) or GGX
 /// conductor (α = roughness²) with F0 = baseColor; otherwise Lambertian with albedo = baseColor.
@@ -12,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "scene/assets.h"
 #include "scene/scene.h"
 
 namespace tessera {
@@ -23,6 +26,8 @@ struct SceneLoadOptions {
     bool allowExternalFiles = false;
     /// Largest file (scene or buffer) read, in bytes. data: URIs are bounded by the scene file's size.
     uint64_t maxFileBytes = uint64_t(4) << 30;
+    /// Folders where TESSERA_asset_mesh names are looked up (never the scene's own URIs).
+    std::vector<std::string> assetRoots = defaultAssetRoots();
 };
 
 /// The extensions this loader understands; any other entry of extensionsRequired is an error.
