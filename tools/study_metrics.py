@@ -24,6 +24,7 @@ LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 # Verdict thresholds: stated in the table header (verdict_rules()) and used by verdict() alone.
 BIAS_SIGMAS = 3.0          # |bias| > 3 SE ...
+BIAS_SIGMAS_HEAVY = 5.0    # ... 5 SE when fireflies dominate (heavy tails: the spread underestimates SE)
 BIAS_MIN_RELATIVE = 0.01   # ... and > 1% of the reference mean is a significant image-mean bias
 SLOPE_CONVERGES = -0.7     # slope at least this steep: the error falls as 1/time (ideal -1)
 SLOPE_PLATEAU = -0.4       # flatter than this without a mean bias: the error stops falling (local bias)
@@ -108,8 +109,10 @@ def verdict_rules():
     return (
         "Verdict rules, applied in this order to the numbers in the row:\n"
         f"1. **NaN**: any non-finite sample dropped by the renderer or non-finite pixel in any render.\n"
-        f"2. A significant image-mean bias is |bias| > {BIAS_SIGMAS:g} SE and |bias| > "
-        f"{BIAS_MIN_RELATIVE:.0%} of the reference mean. Every integrator is unbiased for the paths it "
+        f"2. A significant image-mean bias is |bias| > {BIAS_SIGMAS:g} SE ({BIAS_SIGMAS_HEAVY:g} SE when the "
+        f"firefly share is over {FIREFLY_FACTOR:g}x the reference's: heavy tails make the seed spread "
+        f"underestimate SE) and |bias| > {BIAS_MIN_RELATIVE:.0%} of the reference mean. Every integrator "
+        "is unbiased for the paths it "
         "can sample, so a significant **deficit** means **misses paths** (the dark share says where), "
         "and a significant **excess** means **biased**.\n"
         f"3. No significant mean bias but the fitted slope is flatter than {SLOPE_PLATEAU:g}: the error "
@@ -118,7 +121,7 @@ def verdict_rules():
         f"{FIREFLY_FACTOR:g}x the reference's, then **converges slowly** (rare huge samples dominate).\n"
         f"4. Slope between {SLOPE_PLATEAU:g} and {SLOPE_CONVERGES:g}, or relMSE x seconds (work-normalised "
         f"error at the largest budget) at least {SLOW_FACTOR:g}x the best unbiased method's on the "
-        "scene: **converges slowly**.\n"
+        f"scene, or a firefly share over {FIREFLY_FACTOR:g}x the reference's: **converges slowly**.\n"
         f"5. Otherwise (slope {SLOPE_CONVERGES:g} or steeper, ideal -1, and within {SLOW_FACTOR:g}x of "
         "the best): **converges**.\n"
     )
@@ -129,15 +132,16 @@ def verdict(row, best_work):
     if row["nonfinite_samples"] > 0 or row["nonfinite_pixels"] > 0:
         return "NaN"
     bias, se, ref_mean = row["bias"], row["bias_se"], row["ref_mean"]
-    significant = (math.isfinite(bias) and math.isfinite(se) and abs(bias) > BIAS_SIGMAS * se
+    fireflies = row["firefly_share"] > FIREFLY_FACTOR * max(row["ref_firefly_share"], 1e-12)
+    sigmas = BIAS_SIGMAS_HEAVY if fireflies else BIAS_SIGMAS
+    significant = (math.isfinite(bias) and math.isfinite(se) and abs(bias) > sigmas * se
                    and abs(bias) > BIAS_MIN_RELATIVE * abs(ref_mean))
     if significant:
         return "misses paths" if bias < 0 else "biased"
     slope = row["slope"]
-    fireflies = row["firefly_share"] > FIREFLY_FACTOR * max(row["ref_firefly_share"], 1e-12)
     if not math.isfinite(slope) or slope > SLOPE_PLATEAU:
         return "converges slowly" if fireflies else "biased"
-    if slope > SLOPE_CONVERGES:
+    if slope > SLOPE_CONVERGES or fireflies:
         return "converges slowly"
     if best_work > 0 and row["work"] >= SLOW_FACTOR * best_work:
         return "converges slowly"

@@ -43,7 +43,7 @@ def per_budget(runs):
     return out
 
 
-def _series_plot(ax, runs_by_key, floor, title):
+def _series_plot(ax, runs_by_key, floor, title, labels=None):
     for key, runs in runs_by_key.items():
         pts = per_budget(runs)
         if not pts:
@@ -51,8 +51,9 @@ def _series_plot(ax, runs_by_key, floor, title):
         x = [p[1] for p in pts]
         y = [p[2] for p in pts]
         err = [[p[2] - p[3] for p in pts], [p[4] - p[2] for p in pts]]
-        ax.errorbar(x, y, yerr=err, marker="o", ms=3, lw=1.2, capsize=2, label=key,
-                    color=COLOURS.get(key))
+        biased = labels and labels.get(key) in ("misses paths", "biased", "NaN")
+        ax.errorbar(x, y, yerr=err, marker="o", ms=3, lw=1.2, capsize=2, ls="--" if biased else "-",
+                    label=f"{key}: {labels[key]}" if labels and key in labels else key, color=COLOURS.get(key))
     if floor > 0:
         ax.axhline(floor, color="k", ls=":", lw=0.8, label="reference noise")
     # A slope -1 guide through the plot's centre.
@@ -71,7 +72,7 @@ def _series_plot(ax, runs_by_key, floor, title):
     ax.legend(fontsize=7, loc="best")
 
 
-def scene_chart(path, scene, runs, accel_integrator, default_accel, floor):
+def scene_chart(path, scene, runs, accel_integrator, default_accel, floor, verdicts=None):
     """Left: one line per integrator (default accelerator). Right: one per accelerator (fixed integrator)."""
     by_int = {}
     by_acc = {}
@@ -82,7 +83,7 @@ def scene_chart(path, scene, runs, accel_integrator, default_accel, floor):
             by_acc.setdefault(r["accel"], []).append(r)
     ncols = 2 if len(by_acc) > 1 else 1
     fig, axes = plt.subplots(1, ncols, figsize=(4.6 * ncols, 3.5), dpi=80, squeeze=False)
-    _series_plot(axes[0][0], by_int, floor, f"{scene}: integrators ({default_accel})")
+    _series_plot(axes[0][0], by_int, floor, f"{scene}: integrators ({default_accel})", verdicts)
     if ncols == 2:
         _series_plot(axes[0][1], by_acc, floor, f"{scene}: accelerators ({accel_integrator})")
     fig.tight_layout()

@@ -149,7 +149,7 @@ def run(args, tess, refs, notes, argv):
     if DEFAULT_ACCEL not in accels:
         accels = [DEFAULT_ACCEL] + accels
     command = "tools/study " + " ".join(shlex.quote(a) for a in argv)
-    all_runs, summary, failures = [], [], []
+    all_runs, summary, failures, floors = [], [], [], {}
     os.makedirs(args.out, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="study-") as tmp:
         for ref in refs:
@@ -181,13 +181,17 @@ def run(args, tess, refs, notes, argv):
                 s = summarise(study, *key)
                 if s:
                     summary.append(s)
-            study_report.scene_chart(os.path.join(args.out, f"{ref.name}.png"), ref.name, study.runs,
-                                     args.accel_integrator, DEFAULT_ACCEL, study.floor)
+            floors[ref.name] = study.floor
             all_runs += study.runs
             failures += study.failures
             if ref.stderr is None:
                 notes.append(f"{ref.name}: no standard-error image for the reference: its noise is not subtracted.")
     add_verdicts(summary)
+    for name, floor in floors.items():
+        verdicts = {s["integrator"]: s["verdict"] for s in summary if s["scene"] == name and s["accel"] == DEFAULT_ACCEL}
+        study_report.scene_chart(os.path.join(args.out, f"{name}.png"), name,
+                                 [r for r in all_runs if r["scene"] == name], args.accel_integrator,
+                                 DEFAULT_ACCEL, floor, verdicts)
     order = {n: i for i, n in enumerate(integrators)}
     summary.sort(key=lambda s: (s["scene"], s["accel"] != DEFAULT_ACCEL, order.get(s["integrator"], 99), s["accel"]))
     study_report.write_csv(os.path.join(args.out, "runs.csv"), study_report.RUN_FIELDS, all_runs)
