@@ -1,5 +1,6 @@
 """The study's main loop: series of renders per scene x integrator (and x accelerator), then the
 summaries, verdicts, CSV, charts and stability table."""
+import hashlib
 import json
 import math
 import os
@@ -142,50 +143,91 @@ def add_verdicts(summary):
             s["verdict"] = sm.verdict(s, best)
 
 
+def study_scene(args, tess, ref, tmp, integrators, accels):
+    """Every series of one scene; returns its runs, summaries (no verdicts yet), floor and notes."""
+    notes = []
+    study = SceneStudy(args, tess, ref, tmp)
+    log(f"study: {ref.name} ({ref.scene}) at {study.resolution[0]}x{study.resolution[1]}"
+        f"{'' if study.factor == 1 else f' (1/{study.factor} of the reference)'}, "
+        f"reference noise relMSE {study.floor:.2g}")
+    for integrator in integrators:
+        study.series(integrator, DEFAULT_ACCEL)
+    if args.accel_integrator not in integrators:
+        study.series(args.accel_integrator, DEFAULT_ACCEL)
+    # Same spp and seeds as the default accelerator, one seed per budget: the images agree with the
+    # default accelerator's, only the time moves.
+    base_plan = {}
+    for r in study.runs:
+        if r["integrator"] == args.accel_integrator and r["accel"] == DEFAULT_ACCEL:
+            base_plan.setdefault(r["spp"], r["seed"])
+    base_plan = sorted(base_plan.items())
+    for accel in accels:
+        if accel == DEFAULT_ACCEL:
+            continue
+        why = study.accel_too_slow(accel)
+        if why:
+            notes.append(f"{ref.name}: {why}: left out.")
+            log(f"study: {ref.name}: {why}: left out")
+            continue
+        study.series(args.accel_integrator, accel, base_plan)
+    summary = [s for s in (summarise(study, *k) for k in study.pooled) if s]
+    if ref.stderr is None:
+        notes.append(f"{ref.name}: no standard-error image for the reference: its noise is not subtracted.")
+    return {"runs": study.runs, "summary": summary, "floor": study.floor, "failures": study.failures, "notes": notes}
+
+
+def cache_key(args, ref, integrators, accels):
+    """What a cached scene depends on: reference and scene bytes, renderer binary, study settings."""
+    h = hashlib.sha256()
+    for path in (ref.path, ref.stderr_path, ref.scene, args.binary):
+        if path and os.path.isfile(path):
+            with open(path, "rb") as f:
+                h.update(f.read())
+    h.update(json.dumps([integrators, accels, args.accel_integrator, args.seeds, args.budgets, args.max_seconds,
+                         args.downsample, args.threads]).encode())
+    return h.hexdigest()
+
+
+def load_cache(path, key):
+    try:
+        with open(path) as f:
+            part = json.load(f)
+    except (OSError, ValueError):
+        return None
+    return part if part.get("key") == key else None
+
+
 def run(args, tess, refs, notes, argv):
     t_start = time.time()
+    args.binary = tess.binary
     integrators = args.integrators or tess.integrators()
     accels = args.accels or (["embree", "bvh"] if args.quick else tess.accels())
     if DEFAULT_ACCEL not in accels:
         accels = [DEFAULT_ACCEL] + accels
     command = "tools/study " + " ".join(shlex.quote(a) for a in argv)
-    all_runs, summary, failures, floors = [], [], [], {}
+    all_runs, summary, failures, floors, minutes = [], [], [], {}, 0.0
     os.makedirs(args.out, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="study-") as tmp:
         for ref in refs:
-            study = SceneStudy(args, tess, ref, tmp)
-            log(f"study: {ref.name} ({ref.scene}) at {study.resolution[0]}x{study.resolution[1]}"
-                f"{'' if study.factor == 1 else f' (1/{study.factor} of the reference)'}, "
-                f"reference noise relMSE {study.floor:.2g}")
-            for integrator in integrators:
-                study.series(integrator, DEFAULT_ACCEL)
-            if args.accel_integrator not in integrators:
-                study.series(args.accel_integrator, DEFAULT_ACCEL)
-            # One seed per budget is enough: the images equal the default accelerator's.
-            base_plan = {}
-            for r in study.runs:
-                if r["integrator"] == args.accel_integrator and r["accel"] == DEFAULT_ACCEL:
-                    base_plan.setdefault(r["spp"], r["seed"])
-            base_plan = sorted(base_plan.items())
-            # Same spp and seeds as the default accelerator: the images agree, only the time moves.
-            for accel in accels:
-                if accel == DEFAULT_ACCEL:
-                    continue
-                why = study.accel_too_slow(accel)
-                if why:
-                    notes.append(f"{ref.name}: {why}: left out.")
-                    log(f"study: {ref.name}: {why}: left out")
-                    continue
-                study.series(args.accel_integrator, accel, base_plan)
-            for key in study.pooled:
-                s = summarise(study, *key)
-                if s:
-                    summary.append(s)
-            floors[ref.name] = study.floor
-            all_runs += study.runs
-            failures += study.failures
-            if ref.stderr is None:
-                notes.append(f"{ref.name}: no standard-error image for the reference: its noise is not subtracted.")
+            key = cache_key(args, ref, integrators, accels)
+            cache_path = os.path.join(args.cache, f"{ref.name}.json")
+            cached = load_cache(cache_path, key) if args.resume else None
+            if cached:
+                log(f"study: {ref.name}: reusing {cache_path} (same reference, scene and settings)")
+                part = cached
+            else:
+                t0 = time.time()
+                part = study_scene(args, tess, ref, tmp, integrators, accels)
+                part["key"], part["minutes"] = key, (time.time() - t0) / 60
+                os.makedirs(args.cache, exist_ok=True)
+                with open(cache_path, "w") as f:
+                    json.dump(part, f)
+            summary += part["summary"]
+            floors[ref.name] = part["floor"]
+            all_runs += part["runs"]
+            failures += part["failures"]
+            notes += part["notes"]
+            minutes += part.get("minutes", 0.0)
     add_verdicts(summary)
     for name, floor in floors.items():
         verdicts = {s["integrator"]: s["verdict"] for s in summary if s["scene"] == name and s["accel"] == DEFAULT_ACCEL}
@@ -198,16 +240,18 @@ def run(args, tess, refs, notes, argv):
     study_report.write_csv(os.path.join(args.out, "summary.csv"), study_report.SUMMARY_FIELDS, summary)
     study_report.speed_chart(os.path.join(args.out, "speed.png"), summary, args.accel_integrator)
     elapsed = time.time() - t_start
-    notes = list(notes) + [f"{len(all_runs)} renders, {elapsed / 60:.1f} min wall on {args.threads} threads; "
+    notes = list(notes) + [f"{len(all_runs)} renders, {minutes:.1f} min wall in all on {args.threads} threads; "
                            f"seeds {args.seeds}, budgets {args.budgets}, largest render ~{args.max_seconds:g} s, "
                            f"resolution 1/{args.downsample} of each reference (box-downsampled)."]
     notes += [f"FAILED: {f}" for f in failures]
     study_report.stability_markdown(os.path.join(args.out, "stability.md"), summary, DEFAULT_ACCEL, command,
                                     ["## Notes", ""] + [f"- {n}" for n in notes])
     with open(os.path.join(args.out, "study.json"), "w") as f:
-        json.dump({"command": command, "args": {k: v for k, v in vars(args).items()},
+        root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+        rel = lambda v: os.path.relpath(v, root) if isinstance(v, str) and v.startswith(root) else v
+        json.dump({"command": command, "args": {k: rel(v) for k, v in vars(args).items()},
                    "scenes": [r.name for r in refs], "integrators": integrators, "accels": accels,
-                   "minutes": elapsed / 60, "failures": failures}, f, indent=1)
+                   "minutes": minutes, "failures": failures}, f, indent=1)
     log(f"study: {len(all_runs)} renders in {elapsed:.0f} s -> {args.out}/ (stability.md, summary.csv, runs.csv, *.png)")
     for s in summary:
         if s["accel"] == DEFAULT_ACCEL:
