@@ -115,13 +115,16 @@ def git_revision():
     return rev + ("-dirty" if dirty else "")
 
 
+RUN_BINARY = TESSERA  # replaced by a private copy in main(): a rebuild during the run cannot swap it
+
+
 def render(scene, res, integrator, spp, seed, out, threads):
     cmd = [os.path.relpath(TESSERA, ROOT), "render", scene, "--integrator", integrator, "--spp", str(spp),
            "--seed", str(seed), "--resolution", res, "--max-depth", "-1", "--no-png", "--quiet", "--json",
            "-o", out]
     if threads:
         cmd += ["--threads", str(threads)]
-    result = subprocess.run(cmd, cwd=ROOT, check=True, capture_output=True, text=True)
+    result = subprocess.run([RUN_BINARY] + cmd[1:], cwd=ROOT, check=True, capture_output=True, text=True)
     return json.loads(result.stdout.strip().splitlines()[-1]), cmd
 
 
@@ -347,6 +350,10 @@ def main(argv):
     if not os.path.exists(TESSERA):
         print("build first: cmake -S . -B build -DCMAKE_BUILD_TYPE=Release && cmake --build build")
         return 1
+    global RUN_BINARY
+    bindir = tempfile.mkdtemp(prefix="tessera-refs-bin-")
+    RUN_BINARY = os.path.join(bindir, "tessera")
+    shutil.copy2(TESSERA, RUN_BINARY)
     db_path = os.path.join(out_dir, "refs.json")
     db = {}
     if os.path.exists(db_path):
