@@ -131,8 +131,8 @@ def stability_markdown(path, summary, default_accel, command, notes):
              "reference mean; **relMSE** at the largest budget and its seconds; **work** = relMSE x "
              "seconds there, as a multiple of the scene's best unbiased method; **fireflies** = share "
              "of luminance in the brightest 0.01% of pixels, test / reference; **NaN** = non-finite "
-             "samples dropped / pixels; **dark** = share of the reference's light in pixels the "
-             "method leaves under 10% bright.", ""]
+             "samples dropped / pixels; **dark** = share of the reference's light in 4x4-pixel "
+             "tiles the method (all its renders pooled) leaves under 10% bright.", ""]
     lines += ["| scene | integrator | verdict | slope | bias ± SE (rel.) | relMSE @ s | work | fireflies | NaN | dark |",
               "|---|---|---|---|---|---|---|---|---|---|"]
     for s in summary:

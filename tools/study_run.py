@@ -17,6 +17,8 @@ import study_render
 import study_report
 
 DEFAULT_ACCEL = "embree"
+# Part of every cache key: bump when a metric's definition changes, so --resume recomputes.
+STUDY_VERSION = "2"
 # A non-default accelerator whose predicted time per spp exceeds this many times --max-seconds is
 # left out of a scene (the brute-force reference on a million triangles would take hours).
 ACCEL_SKIP_FACTOR = 10.0
@@ -177,12 +179,14 @@ def study_scene(args, tess, ref, tmp, integrators, accels):
 
 
 def cache_key(args, ref, integrators, accels):
-    """What a cached scene depends on: reference and scene bytes, renderer binary, study settings."""
+    """What a cached scene depends on: reference and scene bytes, study code version and settings. Not
+    the renderer binary: a resumed study trusts that merges in between did not change its images."""
     h = hashlib.sha256()
-    for path in (ref.path, ref.stderr_path, ref.scene, args.binary):
+    for path in (ref.path, ref.stderr_path, ref.scene):
         if path and os.path.isfile(path):
             with open(path, "rb") as f:
                 h.update(f.read())
+    h.update(STUDY_VERSION.encode())
     h.update(json.dumps([integrators, accels, args.accel_integrator, args.seeds, args.budgets, args.max_seconds,
                          args.downsample, args.threads]).encode())
     return h.hexdigest()
