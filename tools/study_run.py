@@ -219,6 +219,10 @@ def run(args, tess, refs, notes, argv):
             if cached:
                 log(f"study: {ref.name}: reusing {cache_path} (same reference, scene and settings)")
                 part = cached
+            elif args.only_cached:
+                notes.append(f"{ref.name}: has a reference but was not studied (no cached results).")
+                log(f"study: {ref.name}: no cached results: left out (--only-cached)")
+                continue
             else:
                 t0 = time.time()
                 part = study_scene(args, tess, ref, tmp, integrators, accels)
