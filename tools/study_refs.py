@@ -122,7 +122,8 @@ def discover(root, refs_dir, names=None, warn=print):
         if stderr is None:
             warn(f"study: {path}: no standard-error image beside it: reference noise not subtracted")
         found.append(Reference(name, path, scene, rgb, stderr, meta, stderr_path))
-    if names:
+    if names:  # in the order asked for
+        found.sort(key=lambda r: names.index(r.name))
         missing = sorted(set(names) - {r.name for r in found})
         for m in missing:
             warn(f"study: no reference for scene '{m}' under {refs_dir}")
