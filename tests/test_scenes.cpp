@@ -25,25 +25,29 @@ struct ShippedScene {
     const char* path;
     bool needsDragon;
     int testSpp;  ///< samples per pixel of the Z-test render (at the reference's resolution)
+    /// Bins of a short render are near normal (no fireflies): the Šidák bound on the largest |z|
+    /// applies. Measured over 8+ seeds (reference_ztest.h); false where caustics or s = 0
+    /// strategies make bin means Poisson-like.
+    bool nearNormal;
 };
 
 // Every scene of tools/make_scenes.py's SCENE_LIST.
 const ShippedScene kScenes[] = {
-    {"cornell-box", "scenes/cornell-box/cornell-box.gltf", false, 4},
-    {"cornell-box-specular", "scenes/cornell-box-specular/cornell-box-specular.gltf", false, 4},
-    {"sphere-cornell", "scenes/sphere-cornell/sphere-cornell.gltf", false, 4},
-    {"sphere-cornell-mirror", "scenes/sphere-cornell/sphere-cornell-mirror.gltf", false, 4},
-    {"sphere-cornell-glass", "scenes/sphere-cornell/sphere-cornell-glass.gltf", false, 4},
-    {"ring-caustic", "scenes/ring-caustic/ring-caustic.gltf", false, 4},
-    {"dragon", "scenes/dragon/dragon.gltf", true, 4},
-    {"glass-dragon", "scenes/dragon/glass-dragon.gltf", true, 4},
-    {"veach-mis", "scenes/veach-mis/veach-mis.gltf", false, 4},
-    {"tiny-light-10", "scenes/tiny-light/tiny-light-10.gltf", false, 4},
-    {"tiny-light-100", "scenes/tiny-light/tiny-light-100.gltf", false, 4},
-    {"door-ajar", "scenes/door-ajar/door-ajar.gltf", false, 4},
-    {"sds-caustic", "scenes/sds-caustic/sds-caustic.gltf", false, 4},
-    {"point-light-specular", "scenes/point-light-specular/point-light-specular.gltf", false, 4},
-    {"furnace", "scenes/furnace/furnace.gltf", false, 4},
+    {"cornell-box", "scenes/cornell-box/cornell-box.gltf", false, 4, true},
+    {"cornell-box-specular", "scenes/cornell-box-specular/cornell-box-specular.gltf", false, 4, false},
+    {"sphere-cornell", "scenes/sphere-cornell/sphere-cornell.gltf", false, 4, false},
+    {"sphere-cornell-mirror", "scenes/sphere-cornell/sphere-cornell-mirror.gltf", false, 4, false},
+    {"sphere-cornell-glass", "scenes/sphere-cornell/sphere-cornell-glass.gltf", false, 4, false},
+    {"ring-caustic", "scenes/ring-caustic/ring-caustic.gltf", false, 4, false},
+    {"dragon", "scenes/dragon/dragon.gltf", true, 4, true},
+    {"glass-dragon", "scenes/dragon/glass-dragon.gltf", true, 4, false},
+    {"veach-mis", "scenes/veach-mis/veach-mis.gltf", false, 4, true},
+    {"tiny-light-10", "scenes/tiny-light/tiny-light-10.gltf", false, 4, true},
+    {"tiny-light-100", "scenes/tiny-light/tiny-light-100.gltf", false, 4, true},
+    {"door-ajar", "scenes/door-ajar/door-ajar.gltf", false, 4, false},
+    {"sds-caustic", "scenes/sds-caustic/sds-caustic.gltf", false, 4, false},
+    {"point-light-specular", "scenes/point-light-specular/point-light-specular.gltf", false, 4, false},
+    {"furnace", "scenes/furnace/furnace.gltf", false, 4, true},
 };
 
 const char* const kIntegrators[] = {"pt", "ptnee", "lt", "bdpt"};
@@ -103,7 +107,7 @@ Reference loadReference(const std::string& name) {
     return r;
 }
 
-test::ZTestResult zTest(const Reference& ref, const std::vector<float>& rgba, int testSpp) {
+test::ZTestResult zTest(const Reference& ref, const std::vector<float>& rgba, int testSpp, int bin = 8) {
     test::ZTestInput in;
     in.width = ref.mean.width;
     in.height = ref.mean.height;
@@ -112,6 +116,7 @@ test::ZTestResult zTest(const Reference& ref, const std::vector<float>& rgba, in
     in.refSeRgba = ref.stderr_.rgba.data();
     in.refSamples = ref.samples;
     in.testSamples = testSpp;
+    in.bin = bin;
     return test::referenceZTest(in);
 }
 
@@ -200,9 +205,18 @@ TEST_P(ShippedSceneTest, MatchesItsReference) {
     Scene scene = loadShipped(s);
     auto accel = createAccel("embree", scene.geometry);
     Film film = render(scene, *accel, ref.integrator, ref.mean.width, ref.mean.height, s.testSpp, 7);
-    test::ZTestResult z = zTest(ref, film.rgba(), s.testSpp);
+    test::ZTestResult z = zTest(ref, film.rgba(), s.testSpp, s.nearNormal ? 8 : 16);
     EXPECT_GT(z.tests, 100) << s.name;
-    EXPECT_TRUE(z.passed(0.01)) << s.name << " (" << ref.integrator << "): " << z.describe();
+    EXPECT_TRUE(z.passed(0.01, s.nearNormal)) << s.name << " (" << ref.integrator << "): " << z.describe();
+    // Where bins are near normal, the same render 5% darker must fail: the test has the power to
+    // see a small global bias there. (In the firefly scenes a 4-spp render cannot resolve 5%: the
+    // sphere boxes and door-ajar give Σz/√n ≈ −4 for it, inside the correlated spread.)
+    if (!s.nearNormal) return;
+    std::vector<float> darker = film.rgba();
+    for (size_t i = 0; i < darker.size(); ++i)
+        if (i % 4 != 3) darker[i] *= 0.95f;
+    test::ZTestResult dark = zTest(ref, darker, s.testSpp, s.nearNormal ? 8 : 16);
+    EXPECT_FALSE(dark.passed(0.01, s.nearNormal)) << s.name << ": 5% darker passed: " << dark.describe();
 }
 
 INSTANTIATE_TEST_SUITE_P(Shipped, ShippedSceneTest, testing::ValuesIn(kScenes), paramName);

@@ -670,10 +670,14 @@ def sds_caustic():
     glass = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
                        transmission=1.0, ior=1.5)
     mirror = g.material("mirror", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
-    light = g.material("light", emission=((1.0, 0.95, 0.85), 400.0))
+    light = g.material("light", emission=((1.0, 0.95, 0.85), 900.0))
     g.quads("floor", [floor_quad(4.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
     g.sphere("glass sphere", (0.0, 0.9, 0.0), 0.5, glass)
-    g.sphere("light", (-2.4, 3.0, 0.0), 0.12, light)
+    # The light sits behind the mirror's plane (z < y - 4) and below its lower edge (y 2.44), so it
+    # lights the floor and the sphere directly but never the mirror's front: otherwise the mirror
+    # would also relay it onto the whole floor (light, mirror, floor, mirror: only s = 0 again) and
+    # bury the glass caustic in fireflies.
+    g.sphere("light", (-2.0, 2.4, -2.9), 0.12, light)
     # Mirror centred at (0, 4, 0) facing the camera and the floor: normal (0, -1, 1)/sqrt 2, so a
     # camera ray along -z turns to -y (looking straight down onto the floor).
     n = normalize((0.0, -1.0, 1.0))
