@@ -30,6 +30,7 @@ SLOPE_CONVERGES = -0.7     # slope at least this steep: the error falls as 1/tim
 SLOPE_PLATEAU = -0.4       # flatter than this without a mean bias: the error stops falling (local bias)
 SLOW_FACTOR = 10.0         # relMSE x seconds at least 10x the scene's best unbiased method: slow
 FIREFLY_FACTOR = 5.0       # test firefly share over 5x the reference's: fireflies dominate the error
+SEED_SPREAD = 3.0          # relMSE max/min over the seeds of the largest budget: heavy tails
 
 
 def image_mean(rgb):
@@ -121,8 +122,10 @@ def verdict_rules():
         "and a significant **excess** means **biased**.\n"
         f"3. No significant mean bias but the fitted slope is flatter than {SLOPE_PLATEAU:g}: the error "
         "stops falling with time although the mean is right: **biased** (locally: energy in the wrong "
-        "place), unless the test's firefly share is over "
-        f"{FIREFLY_FACTOR:g}x the reference's, then **converges slowly** (rare huge samples dominate).\n"
+        "place), unless the signs of heavy tails are there: the slope is positive (the expected error "
+        "of an average cannot rise with samples, so the low early errors are rare large samples not yet "
+        f"drawn), the seeds disagree (relMSE max/min over {SEED_SPREAD:g}x at the largest budget) or "
+        f"the firefly share is over {FIREFLY_FACTOR:g}x the reference's; then **converges slowly**.\n"
         f"4. Slope between {SLOPE_PLATEAU:g} and {SLOPE_CONVERGES:g}, or relMSE x seconds (work-normalised "
         f"error at the largest budget) at least {SLOW_FACTOR:g}x the best unbiased method's on the "
         f"scene, or a firefly share over {FIREFLY_FACTOR:g}x the reference's: **converges slowly**.\n"
@@ -143,8 +146,9 @@ def verdict(row, best_work):
     if significant:
         return "misses paths" if bias < 0 else "biased"
     slope = row["slope"]
+    heavy = fireflies or row.get("seed_spread", 1.0) > SEED_SPREAD or (math.isfinite(slope) and slope > 0)
     if not math.isfinite(slope) or slope > SLOPE_PLATEAU:
-        return "converges slowly" if fireflies else "biased"
+        return "converges slowly" if heavy else "biased"
     if slope > SLOPE_CONVERGES or fireflies:
         return "converges slowly"
     if best_work > 0 and row["work"] >= SLOW_FACTOR * best_work:

@@ -14,7 +14,7 @@ RUN_FIELDS = ["scene", "integrator", "accel", "spp", "seed", "width", "height", 
               "build_seconds", "samples_per_second", "relmse", "rmse", "mean_test", "mean_ref",
               "firefly_share", "nonfinite_samples", "nonfinite_pixels", "ref_floor"]
 SUMMARY_FIELDS = ["scene", "integrator", "accel", "renders", "spp_series", "seconds_top", "relmse_top",
-                  "slope", "work", "ref_mean", "bias", "bias_se", "bias_relative", "firefly_share",
+                  "slope", "seed_spread", "work", "ref_mean", "bias", "bias_se", "bias_relative", "firefly_share",
                   "ref_firefly_share", "nonfinite_samples", "nonfinite_pixels", "dark_share",
                   "ref_floor", "ref_limited", "samples_per_second", "verdict"]
 

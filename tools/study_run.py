@@ -236,6 +236,11 @@ def run(args, tess, refs, notes, argv):
             failures += part["failures"]
             notes += part["notes"]
             minutes += part.get("minutes", 0.0)
+    for s in summary:  # seed agreement at the largest budget (the verdicts' heavy-tail sign)
+        rows = [r for r in all_runs if (r["scene"], r["integrator"], r["accel"]) == (s["scene"], s["integrator"], s["accel"])]
+        top = max(r["spp"] for r in rows)
+        rel = [r["relmse"] for r in rows if r["spp"] == top and r["relmse"] > 0]
+        s["seed_spread"] = max(rel) / min(rel) if rel else float("nan")
     add_verdicts(summary)
     for name, floor in floors.items():
         verdicts = {s["integrator"]: s["verdict"] for s in summary if s["scene"] == name and s["accel"] == DEFAULT_ACCEL}
