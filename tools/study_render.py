@@ -50,6 +50,8 @@ class Tessera:
                                timeout=self.timeout)
         except subprocess.TimeoutExpired:
             raise RenderError(f"timed out after {self.timeout} s: {' '.join(cmd)}")
+        except OSError as e:  # e.g. the binary being relinked under us
+            raise RenderError(f"cannot run {self.binary}: {e}")
         if r.returncode != 0:
             raise RenderError(f"exit {r.returncode}: {' '.join(cmd)}\n{r.stderr.strip()}")
         lines = [l for l in r.stdout.splitlines() if l.startswith("{")]
@@ -61,7 +63,10 @@ class Tessera:
 
     def compare(self, test, ref):
         cmd = [self.binary, "compare", test, ref, "--json"]
-        r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        except OSError as e:
+            raise RenderError(f"cannot run {self.binary}: {e}")
         if r.returncode != 0:
             raise RenderError(f"exit {r.returncode}: {' '.join(cmd)}\n{r.stderr.strip()}")
         return json.loads(r.stdout.strip().splitlines()[-1])
