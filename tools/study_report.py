@@ -1,5 +1,6 @@
 """CSV, PNG charts and the Markdown stability table of the convergence study."""
 import csv
+import io
 import math
 import os
 
@@ -7,6 +8,7 @@ import matplotlib
 
 matplotlib.use("Agg")  # no display in CI
 import matplotlib.pyplot as plt  # noqa: E402
+from PIL import Image  # noqa: E402  (python3-pil comes with python3-matplotlib)
 
 import study_metrics  # noqa: E402
 
@@ -21,6 +23,15 @@ SUMMARY_FIELDS = ["scene", "integrator", "accel", "renders", "spp_series", "seco
 COLOURS = {"pt": "#d62728", "ptnee": "#1f77b4", "lt": "#ff7f0e", "bdpt": "#2ca02c",
            "bdpt-balance": "#9467bd", "embree": "#1f77b4", "bvh": "#2ca02c", "brute": "#7f7f7f",
            "kdtree": "#ff7f0e"}
+
+
+def _save(fig, path):
+    """PNG with a 64-colour palette: the charts are flat colours, and the repository keeps them."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    plt.close(fig)
+    buf.seek(0)
+    Image.open(buf).convert("RGB").convert("P", palette=Image.ADAPTIVE, colors=64).save(path, optimize=True)
 
 
 def write_csv(path, fields, rows):
@@ -87,8 +98,7 @@ def scene_chart(path, scene, runs, accel_integrator, default_accel, floor, verdi
     if ncols == 2:
         _series_plot(axes[0][1], by_acc, floor, f"{scene}: accelerators ({accel_integrator})")
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def speed_chart(path, summary, accel_integrator):
@@ -113,8 +123,7 @@ def speed_chart(path, summary, accel_integrator):
     ax.legend(fontsize=7)
     ax.grid(True, axis="y", lw=0.3)
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def _fmt(v, spec=".3g"):

@@ -236,8 +236,14 @@ def run(args, tess, refs, notes, argv):
             failures += part["failures"]
             notes += part["notes"]
             minutes += part.get("minutes", 0.0)
-    for s in summary:  # seed agreement at the largest budget (the verdicts' heavy-tail sign)
+    for s in summary:
         rows = [r for r in all_runs if (r["scene"], r["integrator"], r["accel"]) == (s["scene"], s["integrator"], s["accel"])]
+        # The slope over the series' budgets only: the lone 1-spp calibration render (one seed) is
+        # left out unless the series starts there, as its error is the least representative.
+        pts = [p for p in study_report.per_budget(rows)
+               if sum(1 for r in rows if r["spp"] == p[0]) > 1 or args.seeds == 1 or s["accel"] != DEFAULT_ACCEL]
+        s["slope"] = sm.loglog_slope([p[1] for p in pts], [p[2] - floors[s["scene"]] for p in pts])
+        # Seed agreement at the largest budget (a heavy-tail sign for the verdicts).
         top = max(r["spp"] for r in rows)
         rel = [r["relmse"] for r in rows if r["spp"] == top and r["relmse"] > 0]
         s["seed_spread"] = max(rel) / min(rel) if rel else float("nan")
