@@ -5,6 +5,7 @@
 // slightly different scene.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -89,6 +90,19 @@ std::string metadata(const io::Image& image, const std::string& key) {
     for (const auto& [k, v] : image.metadata)
         if (k == key) return v;
     return "";
+}
+
+/// FNV-1a 64 of a file, formatted like the renderer's tessera:scene_hash metadata.
+std::string fnv1aOfFile(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    uint64_t h = 0xcbf29ce484222325ULL;
+    for (char c; in.get(c);) {
+        h ^= uint8_t(c);
+        h *= 0x100000001b3ULL;
+    }
+    char out[32];
+    std::snprintf(out, sizeof out, "fnv1a64:%016llx", static_cast<unsigned long long>(h));
+    return out;
 }
 
 struct Reference {
@@ -199,6 +213,8 @@ TEST_P(ShippedSceneTest, MatchesItsReference) {
     if (s.needsDragon && !dragonAvailable()) GTEST_SKIP() << kNoDragon;
     Reference ref = loadReference(s.name);
     ASSERT_FALSE(ref.integrator.empty()) << "refs/" << s.name << ".exr has no tessera:integrator";
+    ASSERT_EQ(metadata(ref.mean, "tessera:scene_hash"), fnv1aOfFile(test::sourcePath(s.path)))
+        << s.path << " changed since refs/" << s.name << ".exr was made: run python3 tools/make_refs.py " << s.name;
     ASSERT_GE(ref.samples, 16.0 * s.testSpp) << "the reference's variance must be >= 16x below the test's";
     ASSERT_EQ(ref.stderr_.width, ref.mean.width);
     ASSERT_EQ(ref.stderr_.height, ref.mean.height);
