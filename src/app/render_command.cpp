@@ -98,6 +98,10 @@ void writeBdptStrategyImages(const RenderArgs& a, const RenderSettings& s, const
     RenderContext limited = ctx;
     limited.maxDepth = maxVertices - 2;
     ro.progress = nullptr;
+    // Fresh renders of their own: no resumed state, no checkpoints, no test stop.
+    ro.resume = nullptr;
+    ro.onPassEnd = nullptr;
+    ro.stopAfterTiles = 0;
     for (int n = 2; n <= maxVertices; ++n)
         for (int t = 1; t <= n; ++t) {
             int sLight = n - t;
