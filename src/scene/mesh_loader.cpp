@@ -10,6 +10,7 @@
 #include <cstring>
 #include <string_view>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "core/error.h"
@@ -311,7 +312,7 @@ TriangleMesh loadPlyMesh(const std::string& path, const MeshLoadOptions& options
                     double count = reader.read(p.countType);
                     if (count < 0) reader.fail("negative list length " + num(count));
                     // Every item takes at least one byte: a count beyond the data left is a lie.
-                    if (count > double(reader.bytesLeft())) reader.fail("list length " + std::to_string(uint64_t(count)) + " exceeds the data left");
+                    if (count > double(reader.bytesLeft())) reader.fail("list length " + num(count) + " exceeds the data left");
                     size_t k = size_t(count);
                     bool indices = isFace && !faceDone && (p.name == "vertex_indices" || p.name == "vertex_index");
                     poly.clear();
@@ -319,8 +320,10 @@ TriangleMesh loadPlyMesh(const std::string& path, const MeshLoadOptions& options
                         double v = reader.read(p.type);
                         if (!indices) continue;
                         if (!(v >= 0) || v != std::floor(v)) reader.fail("vertex index " + num(v) + " is not a non-negative integer");
-                        if (vertexCountKnown ? v >= double(vertexCount) : v > double(0xfffffffeu))
-                            reader.fail("vertex index " + std::to_string(uint64_t(v)) + " out of range (the file has " +
+                        // Compared as doubles and printed with num(): converting an out-of-range double
+                        // to an integer is undefined behaviour (found by tools/fuzz.sh).
+                        if ((vertexCountKnown && v >= double(vertexCount)) || v > double(0xfffffffeu))
+                            reader.fail("vertex index " + num(v) + " out of range (the file has " +
                                         std::to_string(vertexCount) + " vertices)");
                         poly.push_back(uint32_t(v));
                     }
@@ -332,9 +335,10 @@ TriangleMesh loadPlyMesh(const std::string& path, const MeshLoadOptions& options
                 } else {
                     double v = reader.read(p.type);
                     if (isVertex && (i == xi || i == yi || i == zi)) {
-                        float f = float(v);
-                        if (!std::isfinite(f)) reader.fail("non-finite coordinate " + p.name + " = " + num(v) + (std::isfinite(v) ? " (beyond float range)" : ""));
-                        (i == xi ? pos.x : i == yi ? pos.y : pos.z) = f;
+                        // Checked before the conversion: a double beyond float range makes float(v) undefined.
+                        if (!(std::abs(v) <= double(std::numeric_limits<float>::max())))
+                            reader.fail("non-finite coordinate " + p.name + " = " + num(v) + (std::isfinite(v) ? " (beyond float range)" : ""));
+                        (i == xi ? pos.x : i == yi ? pos.y : pos.z) = float(v);
                     }
                 }
             }

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Writes tests/corpus/malformed-mesh: PLY and OBJ files that the mesh loader must refuse with a
 one-line error naming file, element/row or line, and problem (tests/test_robust_mesh_loader.cpp).
-Run from anywhere: python3 tests/corpus/make_malformed_meshes.py"""
+Run from anywhere: python3 tests/corpus/make_malformed_meshes.py
+Files named fuzz-* are inputs found by tools/fuzz.sh, kept as found (not written here)."""
 import gzip, os, struct
 
 out = os.path.join(os.path.dirname(os.path.abspath(__file__)), "malformed-mesh")
