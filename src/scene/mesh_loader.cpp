@@ -21,8 +21,9 @@ namespace {
 
 /// A number for messages: integers without decimals, others with enough digits to recognise.
 std::string num(double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.9g", v);
+    char buf[40];
+    bool exactInteger = v == std::floor(v) && std::abs(v) < 9007199254740992.0;  // 2^53
+    std::snprintf(buf, sizeof buf, exactInteger ? "%.0f" : "%.9g", v);
     return buf;
 }
 
