@@ -31,6 +31,6 @@ if [ "$what" = tsan ] || [ "$what" = all ]; then
   # are the point. The suppressions file lists only reports inside uninstrumented libraries, each
   # with the reason.
   TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$root/tools/tsan.supp" \
-    run tsan thread -R 'Determinism|Render|Furnace|Resume|NonFinite|RobustOutputs|Bvh.BuildIsIdentical' || status=1
+    run tsan thread -R 'Determinism|Render|Furnace|Resume|NonFinite|RobustOutputs|DebugPixel' || status=1
 fi
 exit $status

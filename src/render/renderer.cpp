@@ -16,6 +16,20 @@
 namespace tessera {
 namespace {
 
+/// ThreadSanitizer cannot see the synchronisation inside Debian's (uninstrumented) libtbb, so it
+/// takes every hand-off of a task between threads for a race. These calls tell it what TBB
+/// guarantees: everything before parallel_for happens before each tile task, and each tile task
+/// happens before parallel_for returns (tools/sanitize.sh). They compile to nothing otherwise.
+#if defined(__SANITIZE_THREAD__)
+extern "C" void __tsan_acquire(void* addr);
+extern "C" void __tsan_release(void* addr);
+inline void tsanRelease(void* addr) { __tsan_release(addr); }
+inline void tsanAcquire(void* addr) { __tsan_acquire(addr); }
+#else
+inline void tsanRelease(void*) {}
+inline void tsanAcquire(void*) {}
+#endif
+
 struct Tile {
     int x0, y0, x1, y1;
 };
@@ -92,6 +106,8 @@ RenderStats renderImage(const RenderContext& ctx, const Integrator& integrator, 
         } else {
             std::fill(tileDone.begin(), tileDone.end(), 0);
         }
+        int passStart = 0, passEnd = 0;  // addresses for the TSan hand-off annotations only
+        tsanRelease(&passStart);
         arena.execute([&] {
             enableFlushToZero();
             tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
@@ -99,6 +115,7 @@ RenderStats renderImage(const RenderContext& ctx, const Integrator& integrator, 
                 // tile. Set here rather than by a tbb::task_scheduler_observer, whose proxy oneTBB
                 // 2021.8 leaks when the arena goes away (LeakSanitizer, tools/sanitize.sh).
                 enableFlushToZero();
+                tsanAcquire(&passStart);
                 for (size_t t = r.begin(); t != r.end(); ++t) {
                     if (tileDone[t]) continue;
                     if (cancelled()) return;
@@ -131,8 +148,10 @@ RenderStats renderImage(const RenderContext& ctx, const Integrator& integrator, 
                     tilesRendered.fetch_add(1, std::memory_order_relaxed);
                     if (opt.progress) opt.progress->advance(uint64_t(tile.x1 - tile.x0) * uint64_t(tile.y1 - tile.y0) * n);
                 }
+                tsanRelease(&passEnd);
             }, tbb::simple_partitioner());
         });
+        tsanAcquire(&passEnd);
         bool complete = std::all_of(tileDone.begin(), tileDone.end(), [](uint8_t d) { return d != 0; });
         // Stopped mid-pass: the checkpoint keeps this pass's splats unmerged (tile order, see above).
         if (!complete && opt.onPassEnd) opt.onPassEnd(film, stateNow(/* withPartialPass = */ true), true);
