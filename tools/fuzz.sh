@@ -1,11 +1,14 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer target for the glTF loader with clang + ASan/UBSan and runs it.
-#   tools/fuzz.sh [SECONDS]      (default 300)
-# Seed corpus: the shipped scenes and tests/corpus/malformed. New crashes are written to
-# build-fuzz/crashes/; add each one to tests/corpus/malformed once fixed.
+# Builds the libFuzzer targets for the scene loaders with clang + ASan/UBSan and runs them.
+#   tools/fuzz.sh [SECONDS] [gltf|mesh|all]      (default 300 s per target, all)
+# Seed corpora: gltf: the shipped scenes and tests/corpus/malformed; mesh: tests/corpus/malformed-mesh,
+# a valid quad in PLY (ASCII, binary) and OBJ, and the smallest Stanford bunny when TESSERA_ASSETS
+# (default ../shared/data) has it. New crashes are written to build-fuzz/crashes-TARGET/; add each
+# one to tests/corpus/malformed or tests/corpus/malformed-mesh once fixed.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 seconds="${1:-300}"
+which="${2:-all}"
 for p in clang libclang-rt-14-dev; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=" $p"
 done
@@ -13,12 +16,38 @@ if [ -n "${missing:-}" ]; then
   apt-get update -qq >/dev/null && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $missing >/dev/null
 fi
 build="$root/build-fuzz"
+targets=()
+[ "$which" = gltf ] || [ "$which" = all ] && targets+=(gltf)
+[ "$which" = mesh ] || [ "$which" = all ] && targets+=(mesh)
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
   -DTESSERA_FUZZ=ON -DTESSERA_BUILD_TESTS=OFF -DTESSERA_SANITIZE=address,undefined >/dev/null
-cmake --build "$build" -j "$(nproc)" --target fuzz_gltf_loader >/dev/null
-mkdir -p "$build/corpus" "$build/crashes"
-cp "$root"/scenes/*/*.gltf "$root"/tests/corpus/malformed/*.gltf "$build/corpus/" 2>/dev/null || true
+for t in "${targets[@]}"; do
+  nice cmake --build "$build" -j "$(nproc)" --target "fuzz_${t}_loader" >/dev/null
+done
+
+# Seeds.
+mkdir -p "$build/corpus-gltf" "$build/corpus-mesh"
+cp "$root"/scenes/*/*.gltf "$root"/tests/corpus/malformed/*.gltf "$build/corpus-gltf/" 2>/dev/null || true
+cp "$root"/tests/corpus/malformed-mesh/* "$build/corpus-mesh/"
+printf 'ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n' \
+  > "$build/corpus-mesh/quad-ascii.ply"
+python3 - "$build/corpus-mesh/quad-binary.ply" <<'PY'
+import struct, sys
+h = b"ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+v = b"".join(struct.pack("<3f", *p) for p in [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)])
+f = struct.pack("<B3i", 3, 0, 1, 2) + struct.pack("<B3i", 3, 0, 2, 3)
+open(sys.argv[1], "wb").write(h + v + f)
+PY
+printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1 -1/1\n' > "$build/corpus-mesh/quad.obj"
+assets="${TESSERA_ASSETS:-$root/../shared/data}"
+[ -f "$assets/stanford-bunny/bun_zipper_res4.ply" ] && cp "$assets/stanford-bunny/bun_zipper_res4.ply" "$build/corpus-mesh/"
+
 cd "$build"
-UBSAN_OPTIONS=halt_on_error=1 ./tests/fuzz/fuzz_gltf_loader -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
-  -artifact_prefix="$build/crashes/" "$build/corpus" 2>&1 | tee "$build/fuzz.log" | grep -E "^#[0-9]+ +(DONE|pulse)|ERROR|SUMMARY" || true
-tail -n 3 "$build/fuzz.log"
+for t in "${targets[@]}"; do
+  mkdir -p "crashes-$t"
+  echo "== fuzz_${t}_loader, ${seconds} s"
+  UBSAN_OPTIONS=halt_on_error=1 nice "./tests/fuzz/fuzz_${t}_loader" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
+    -artifact_prefix="$build/crashes-$t/" "corpus-$t" 2>&1 | tee "fuzz-$t.log" | grep -E "^#[0-9]+ +(DONE|pulse)|ERROR|SUMMARY" || true
+  tail -n 3 "fuzz-$t.log"
+  echo "crash inputs: $(ls "crashes-$t" | wc -l)"
+done

@@ -3,6 +3,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +19,8 @@
 #include "integrators/integrator.h"
 #include "io/display_transform.h"
 #include "io/image_output.h"
+#include "render/checkpoint.h"
+#include "render/debug_pixel.h"
 #include "render/interrupt.h"
 #include "render/renderer.h"
 #include "scene/gltf_loader.h"
@@ -27,11 +31,15 @@ namespace {
 struct RenderArgs {
     std::string scene, output, png, resolution, integrator, accel, lookAt, display = "sRGB", view = "Standard";
     std::string bdptStrategies;  ///< directory for the per-strategy debug images (empty: none)
+    std::string debugPixel;  ///< "x,y,s": replay one sample with a trace instead of rendering
     int spp = 0, threads = 0, maxDepth = -2;
     double timeLimit = 0.0, fovDeg = 0.0;
     int64_t seed = -1;
     bool quiet = false, json = false, noPng = false, allowExternalFiles = false;
     double maxMemoryGiB = 16.0;
+    double checkpointSeconds = -1.0;  ///< < 0: no checkpoints
+    bool resume = false;
+    uint64_t stopAfterTiles = 0;      ///< test hook (hidden option)
 };
 
 /// FNV-1a 64 of the scene file: identifies the exact input in the output's metadata.
@@ -90,6 +98,10 @@ void writeBdptStrategyImages(const RenderArgs& a, const RenderSettings& s, const
     RenderContext limited = ctx;
     limited.maxDepth = maxVertices - 2;
     ro.progress = nullptr;
+    // Fresh renders of their own: no resumed state, no checkpoints, no test stop.
+    ro.resume = nullptr;
+    ro.onPassEnd = nullptr;
+    ro.stopAfterTiles = 0;
     for (int n = 2; n <= maxVertices; ++n)
         for (int t = 1; t <= n; ++t) {
             int sLight = n - t;
@@ -110,6 +122,48 @@ void writeBdptStrategyImages(const RenderArgs& a, const RenderSettings& s, const
                 io::writeExr(path, s.width, s.height, rgba.data(), m);
             }
         }
+}
+
+/// Hexadecimal float: the exact bits, so a camera changed in the last digit is a different camera.
+std::string exact(float v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%a", double(v));
+    return buf;
+}
+
+/// Every setting that decides the pixels of a render (and so must match to resume it). The
+/// acceleration structure and the thread count are left out: they do not change the image.
+CheckpointHeader checkpointHeader(const RenderArgs& a, const RenderSettings& s, const CameraDesc& cam, const Integrator& integrator,
+                                  int tileSize) {
+    std::string camera;
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) camera += exact(cam.cameraToWorld[c][r]) + ",";
+    camera += exact(cam.yfov) + "," + exact(cam.apertureRadius) + "," + exact(cam.focusDistance);
+    return {
+        {"renderer", std::string("tessera ") + versionString() + " (" + gitRevision() + ")"},
+        {"scene_hash", hashFile(a.scene)},
+        {"integrator", std::string(integrator.name())},
+        {"seed", std::to_string(s.seed)},
+        {"resolution", std::to_string(s.width) + "x" + std::to_string(s.height)},
+        {"spp_target", a.timeLimit > 0 ? "time-bounded" : std::to_string(s.spp)},
+        {"max_depth", std::to_string(s.maxDepth)},
+        {"camera", camera},
+        {"tile_size", std::to_string(tileSize)},
+    };
+}
+
+/// "x,y,s" → the sample to replay; checked against the image size.
+SampleId parseDebugPixel(const std::string& text, int width, int height) {
+    std::vector<float> v = parseNumbers(text, "--debug-pixel");
+    if (v.size() != 3 || v[0] != std::floor(v[0]) || v[1] != std::floor(v[1]) || v[2] != std::floor(v[2]) || v[0] < 0 ||
+        v[1] < 0 || v[2] < 0 || v[0] >= float(width) || v[1] >= float(height) || v[2] > 4e9f)
+        throw InputError("--debug-pixel needs x,y,s: a pixel inside the " + std::to_string(width) + "x" + std::to_string(height) +
+                         " image and a sample index >= 0, got '" + text + "'");
+    return SampleId{int(v[0]), int(v[1]), uint32_t(v[2])};
+}
+
+std::string describe(const SampleId& id) {
+    return "pixel (" + std::to_string(id.x) + "," + std::to_string(id.y) + ") sample " + std::to_string(id.sample);
 }
 
 int runRender(const RenderArgs& a) {
@@ -169,16 +223,64 @@ int runRender(const RenderArgs& a) {
     Camera camera(*scene.camera, s.width, s.height);
     RenderContext ctx{scene, *accel, camera, s.maxDepth};
 
+    if (!a.debugPixel.empty()) {
+        SampleId id = parseDebugPixel(a.debugPixel, s.width, s.height);
+        SampleReplay r = replaySample(ctx, *integrator, id, s.seed, std::cerr);
+        if (a.json) {
+            nlohmann::json splats = nlohmann::json::array();
+            for (const SplatSink::Entry& e : r.splats) splats.push_back({e.pixelIndex, {e.value.r, e.value.g, e.value.b}});
+            // Non-finite floats become null in JSON: "finite" says which.
+            std::cout << nlohmann::json{{"pixel", {id.x, id.y}}, {"sample", id.sample}, {"seed", s.seed},
+                                        {"radiance", {r.radiance.r, r.radiance.g, r.radiance.b}}, {"finite", r.finite},
+                                        {"rays", r.rays}, {"splats", splats}}.dump()
+                      << std::endl;
+        } else {
+            std::printf("%s: radiance %.9g %.9g %.9g%s\n", describe(id).c_str(), double(r.radiance.r), double(r.radiance.g),
+                        double(r.radiance.b), r.finite ? "" : " (NON-FINITE)");
+        }
+        return 0;
+    }
+
     Film film(s.width, s.height);
     RenderOptions ro;
     ro.spp = s.spp;
     ro.timeLimitSeconds = a.timeLimit;
     ro.threads = a.threads;
     ro.seed = s.seed;
+    ro.stopAfterTiles = a.stopAfterTiles;
+
+    // Checkpoints: OUT.exr.ckpt beside the image, every --checkpoint SEC (at pass boundaries) and
+    // whenever the render stops early; --resume continues one and keeps it up to date.
+    const std::string checkpointPath = exrPath + ".ckpt";
+    const bool checkpointing = a.checkpointSeconds >= 0.0 || a.resume;
+    CheckpointHeader header = checkpointHeader(a, s, *scene.camera, *integrator, ro.tileSize);
+    RenderState resumed;
+    if (a.resume) {
+        resumed = readCheckpoint(checkpointPath, header, film);
+        ro.resume = &resumed;
+        if (!a.quiet)
+            std::cerr << "tessera: resuming " << checkpointPath << " at " << resumed.sppDone << " spp"
+                      << (resumed.tileDone.empty() ? "" : " (inside a pass)") << std::endl;
+    }
+    auto lastCheckpoint = std::chrono::steady_clock::now();
+    if (checkpointing)
+        ro.onPassEnd = [&](const Film& f, const RenderState& state, bool interrupted) {
+            double since = std::chrono::duration<double>(std::chrono::steady_clock::now() - lastCheckpoint).count();
+            if (!interrupted && since < a.checkpointSeconds) return;
+            try {
+                writeCheckpoint(checkpointPath, header, f, state);
+            } catch (const InputError& e) {
+                // Losing a checkpoint must not lose the render itself.
+                printWarning(e.what());
+            }
+            lastCheckpoint = std::chrono::steady_clock::now();
+        };
+
     InterruptGuard guard;
     interruptFlag().store(false);
     ro.cancel = &interruptFlag();
     uint64_t total = a.timeLimit > 0 ? 0 : uint64_t(s.width) * uint64_t(s.height) * uint64_t(s.spp);
+    if (a.resume) total -= std::min(total, resumed.samples);
     ProgressReporter progress("render " + stem(a.scene), total, a.timeLimit, a.quiet);
     ro.progress = &progress;
     RenderStats stats = renderImage(ctx, *integrator, film, ro);
@@ -200,10 +302,17 @@ int runRender(const RenderArgs& a) {
         {"tessera:threads", std::to_string(stats.threads)},
         {"tessera:nonfinite_dropped", std::to_string(stats.nonFiniteDropped)},
         {"tessera:interrupted", stats.interrupted ? "true" : "false"},
+        {"tessera:resumed", a.resume ? "true" : "false"},
     };
+    if (stats.firstNonFinite) md.push_back({"tessera:first_nonfinite", describe(*stats.firstNonFinite)});
     std::vector<float> rgba = film.rgba();
     io::writeExr(exrPath, s.width, s.height, rgba.data(), md);
     if (display) io::writePng(pngPath, s.width, s.height, rgba.data(), *display, md);
+    // A finished render leaves nothing to resume: a stale checkpoint would only mislead.
+    if (checkpointing && !stats.interrupted) {
+        std::error_code ignored;
+        std::filesystem::remove(checkpointPath, ignored);
+    }
 
     if (!a.bdptStrategies.empty() && !stats.interrupted) writeBdptStrategyImages(a, s, ctx, ro, md);
 
@@ -213,8 +322,15 @@ int runRender(const RenderArgs& a) {
             << samplesPerSecond / 1e6 << " M samples/s, " << stats.threads << " threads)"
             << (stats.interrupted ? ", INTERRUPTED" : "") << " -> " << exrPath << (pngPath.empty() ? "" : ", " + pngPath);
     progress.done(summary.str());
-    if (stats.nonFiniteDropped > 0)
-        printWarning(std::to_string(stats.nonFiniteDropped) + " non-finite sample(s) were dropped");
+    if (stats.nonFiniteDropped > 0) {
+        std::string where;
+        if (stats.firstNonFinite) {
+            const SampleId& f = *stats.firstNonFinite;
+            where = "; first non-finite sample at " + describe(f) + " - replay with --debug-pixel " + std::to_string(f.x) + "," +
+                    std::to_string(f.y) + "," + std::to_string(f.sample);
+        }
+        printWarning(std::to_string(stats.nonFiniteDropped) + " non-finite sample(s) were dropped" + where);
+    }
 
     if (a.json) {
         nlohmann::json j = {
@@ -232,7 +348,11 @@ int runRender(const RenderArgs& a) {
             {"samples_per_second", samplesPerSecond},
             {"nonfinite_dropped", stats.nonFiniteDropped},
             {"interrupted", stats.interrupted},
+            {"resumed", a.resume},
         };
+        if (stats.firstNonFinite)
+            j["first_nonfinite"] = {{"x", stats.firstNonFinite->x}, {"y", stats.firstNonFinite->y}, {"sample", stats.firstNonFinite->sample}};
+        if (checkpointing && stats.interrupted) j["checkpoint"] = checkpointPath;
         std::cout << j.dump() << std::endl;
     }
     return stats.interrupted ? 130 : 0;
@@ -277,6 +397,17 @@ Runner addRenderCommand(CLI::App& app) {
                   "let the scene reference files outside its own folder (off: '..', absolute paths and symlinks out are refused)");
     cmd->add_option("--max-memory", a->maxMemoryGiB, "memory limit in GiB for input files and the film (default: 16)")
         ->check(CLI::Range(0.001, 1e6));
+    cmd->add_option("--checkpoint", a->checkpointSeconds,
+                    "write the accumulation state to OUT.ckpt (OUT: the EXR path) at the first pass boundary after every SEC "
+                    "seconds and when interrupted; removed when the render completes")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_flag("--resume", a->resume,
+                  "continue the render saved in OUT.ckpt (same scene and settings; refused with the setting that differs)");
+    cmd->add_option("--debug-pixel", a->debugPixel,
+                    "replay one camera sample x,y,s exactly as the render takes it, tracing its rays, hits, splats and the "
+                    "first non-finite value on stderr; prints the radiance (or JSON with --json) and writes no image");
+    cmd->add_option("--stop-after-tiles", a->stopAfterTiles, "test hook: behave as if interrupted after this many tiles")
+        ->group("");
     cmd->add_flag("--quiet", a->quiet, "no progress output");
     cmd->add_flag("--json", a->json, "print one JSON object with the run's figures on stdout when done");
     cmd->footer("Ctrl-C stops at the next tile and still writes what was rendered (exit code 130); press it\n"

@@ -14,6 +14,7 @@
 
 #include "core/error.h"
 #include "io/display_transform.h"
+#include "render/interrupt.h"
 
 namespace tessera::io {
 
@@ -72,6 +73,7 @@ void writeAtomically(const std::string& path, const OIIO::ImageSpec& spec, const
 
     const std::string tmpPath = temporaryPath(path);
     TemporaryFileGuard guard(tmpPath);  // Declared before `out`, so `out` is closed first.
+    TemporaryFileForSignal signalCleanup(tmpPath);  // a second Ctrl-C's immediate exit removes it too
     {
         std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path);
         if (!out) {

@@ -43,6 +43,18 @@ public:
     /// Packed float RGBA of the per-pixel standard error of the mean (alpha as in rgba()).
     std::vector<float> standardErrorRgba() const;
 
+    /// The raw accumulation state, for checkpoints (render/checkpoint.h): 3 doubles per pixel for
+    /// sum, sum of squares and splats, one count per pixel. Restoring these restores the film bit
+    /// for bit; the sizes never change.
+    std::vector<double>& sumData() { return sum_; }
+    std::vector<double>& sumSqData() { return sumSq_; }
+    std::vector<double>& splatData() { return splat_; }
+    std::vector<uint32_t>& countData() { return count_; }
+    const std::vector<double>& sumData() const { return sum_; }
+    const std::vector<double>& sumSqData() const { return sumSq_; }
+    const std::vector<double>& splatData() const { return splat_; }
+    const std::vector<uint32_t>& countData() const { return count_; }
+
 private:
     int width_, height_;
     std::vector<double> sum_, sumSq_, splat_;

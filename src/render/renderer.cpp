@@ -4,22 +4,31 @@
 #include <oneapi/tbb/info.h>
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
-#include <oneapi/tbb/task_scheduler_observer.h>
 
+#include <algorithm>
 #include <chrono>
+#include <mutex>
+#include <stdexcept>
+#include <string>
 
 #include "core/fp_env.h"
 
 namespace tessera {
 namespace {
 
-/// Sets FTZ/DAZ in every thread that joins the arena (MXCSR is per thread).
-class FlushToZeroObserver : public tbb::task_scheduler_observer {
-public:
-    explicit FlushToZeroObserver(tbb::task_arena& arena) : tbb::task_scheduler_observer(arena) { observe(true); }
-    ~FlushToZeroObserver() override { observe(false); }
-    void on_scheduler_entry(bool) override { enableFlushToZero(); }
-};
+/// ThreadSanitizer cannot see the synchronisation inside Debian's (uninstrumented) libtbb, so it
+/// takes every hand-off of a task between threads for a race. These calls tell it what TBB
+/// guarantees: everything before parallel_for happens before each tile task, and each tile task
+/// happens before parallel_for returns (tools/sanitize.sh). They compile to nothing otherwise.
+#if defined(__SANITIZE_THREAD__)
+extern "C" void __tsan_acquire(void* addr);
+extern "C" void __tsan_release(void* addr);
+inline void tsanRelease(void* addr) { __tsan_release(addr); }
+inline void tsanAcquire(void* addr) { __tsan_acquire(addr); }
+#else
+inline void tsanRelease(void*) {}
+inline void tsanAcquire(void*) {}
+#endif
 
 struct Tile {
     int x0, y0, x1, y1;
@@ -39,57 +48,116 @@ RenderStats renderImage(const RenderContext& ctx, const Integrator& integrator, 
         for (int x = 0; x < width; x += ts) tiles.push_back({x, y, std::min(x + ts, width), std::min(y + ts, height)});
     std::vector<SplatSink> splats(tiles.size());
     std::vector<uint8_t> tileDone(tiles.size(), 0);
-    std::atomic<uint64_t> nonFinite{0};
+
+    RenderState st = opt.resume ? *opt.resume : RenderState{};
+    if (!st.tileDone.empty() && (st.tileDone.size() != tiles.size() || st.pendingSplats.size() != tiles.size()))
+        throw std::invalid_argument("renderImage: the resumed state has " + std::to_string(st.tileDone.size()) +
+                                    " tiles, the film " + std::to_string(tiles.size()));
+    std::atomic<uint64_t> nonFinite{st.nonFinite};
+    std::atomic<uint64_t> tilesRendered{0};
+    std::mutex firstMutex;
+    std::optional<SampleId> firstNonFinite = st.firstNonFinite;
+    auto cancelled = [&] {
+        return (opt.cancel && opt.cancel->load(std::memory_order_relaxed)) ||
+               (opt.stopAfterTiles > 0 && tilesRendered.load(std::memory_order_relaxed) >= opt.stopAfterTiles);
+    };
 
     RenderStats stats;
     stats.threads = opt.threads > 0 ? opt.threads : tbb::info::default_concurrency();
     tbb::task_arena arena(stats.threads);
-    FlushToZeroObserver ftz(arena);
 
     const bool timed = opt.timeLimitSeconds > 0.0;
     const uint32_t target = timed ? 0xffffffffu : uint32_t(std::max(0, opt.spp));
-    uint32_t s0 = 0, passSpp = 1;
+    uint32_t s0 = st.sppDone, passSpp = std::max(1u, st.passSpp);
+    const uint32_t s0Session = s0;
+    bool resumePartial = !st.tileDone.empty();
+    stats.samples = st.samples;
     uint64_t pixelsTotal = uint64_t(width) * uint64_t(height);
+    auto stateNow = [&](bool withPartialPass) {
+        RenderState cp;
+        cp.sppDone = s0;
+        cp.passSpp = passSpp;
+        cp.samples = stats.samples;
+        cp.nonFinite = nonFinite.load();
+        cp.seconds = st.seconds + elapsed();
+        cp.firstNonFinite = firstNonFinite;
+        if (withPartialPass) {
+            cp.tileDone = tileDone;
+            cp.pendingSplats.resize(tiles.size());
+            for (size_t t = 0; t < tiles.size(); ++t)
+                if (tileDone[t]) cp.pendingSplats[t] = splats[t].entries();
+        }
+        return cp;
+    };
 
     while (s0 < target) {
-        if (timed && s0 > 0) {
-            double used = elapsed(), perSpp = used / double(s0), left = opt.timeLimitSeconds - used;
+        if (timed && s0 > s0Session && !resumePartial) {
+            double used = elapsed(), perSpp = used / double(s0 - s0Session), left = opt.timeLimitSeconds - used;
             if (left <= 0.0) break;
             // Stop at a pass boundary: never start a pass predicted to overrun by more than one spp.
             passSpp = uint32_t(std::clamp(left / std::max(perSpp, 1e-9), 1.0, double(passSpp)));
         }
         uint32_t n = std::min(passSpp, target - s0);
-        std::fill(tileDone.begin(), tileDone.end(), 0);
+        if (resumePartial) {
+            // The pass the checkpoint stopped in: its finished tiles are in the film, their splats wait.
+            tileDone = st.tileDone;
+            for (size_t t = 0; t < tiles.size(); ++t) splats[t].entries() = std::move(st.pendingSplats[t]);
+            resumePartial = false;
+        } else {
+            std::fill(tileDone.begin(), tileDone.end(), 0);
+        }
+        int passStart = 0, passEnd = 0;  // addresses for the TSan hand-off annotations only
+        tsanRelease(&passStart);
         arena.execute([&] {
             enableFlushToZero();
             tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+                // FTZ/DAZ in whichever thread runs the tile (MXCSR is per thread): a few cycles per
+                // tile. Set here rather than by a tbb::task_scheduler_observer, whose proxy oneTBB
+                // 2021.8 leaks when the arena goes away (LeakSanitizer, tools/sanitize.sh).
+                enableFlushToZero();
+                tsanAcquire(&passStart);
                 for (size_t t = r.begin(); t != r.end(); ++t) {
-                    if (opt.cancel && opt.cancel->load(std::memory_order_relaxed)) return;
+                    if (tileDone[t]) continue;
+                    if (cancelled()) return;
                     const Tile& tile = tiles[t];
                     SplatSink& sink = splats[t];
                     uint64_t bad = 0;
+                    std::optional<SampleId> tileFirst;
                     for (int y = tile.y0; y < tile.y1; ++y)
                         for (int x = tile.x0; x < tile.x1; ++x)
                             for (uint32_t s = s0; s < s0 + n; ++s) {
                                 Sampler sampler(Vec2i(x, y), s, opt.seed);
                                 Vec2f raster = Vec2f(float(x), float(y)) + sampler.get2D();
+                                size_t splatsBefore = sink.entries().size();
                                 Rgb L = integrator.sample(ctx, Vec2i(x, y), raster, sampler, sink);
-                                if (isFinite(L)) film.addSample(x, y, L);
+                                bool finite = isFinite(L);
+                                if (finite) film.addSample(x, y, L);
                                 else ++bad;
+                                // Non-finite splats are dropped at the merge; note their sample here.
+                                for (size_t k = splatsBefore; finite && k < sink.entries().size(); ++k)
+                                    finite = isFinite(sink.entries()[k].value);
+                                SampleId id{x, y, s};
+                                if (!finite && (!tileFirst || id < *tileFirst)) tileFirst = id;
                             }
                     if (bad) nonFinite.fetch_add(bad, std::memory_order_relaxed);
+                    if (tileFirst) {
+                        std::lock_guard<std::mutex> lock(firstMutex);
+                        if (!firstNonFinite || *tileFirst < *firstNonFinite) firstNonFinite = tileFirst;
+                    }
                     tileDone[t] = 1;
+                    tilesRendered.fetch_add(1, std::memory_order_relaxed);
                     if (opt.progress) opt.progress->advance(uint64_t(tile.x1 - tile.x0) * uint64_t(tile.y1 - tile.y0) * n);
                 }
+                tsanRelease(&passEnd);
             }, tbb::simple_partitioner());
         });
+        tsanAcquire(&passEnd);
+        bool complete = std::all_of(tileDone.begin(), tileDone.end(), [](uint8_t d) { return d != 0; });
+        // Stopped mid-pass: the checkpoint keeps this pass's splats unmerged (tile order, see above).
+        if (!complete && opt.onPassEnd) opt.onPassEnd(film, stateNow(/* withPartialPass = */ true), true);
         // Merge splats in tile order: the sums then do not depend on which thread ran which tile.
-        bool complete = true;
         for (size_t t = 0; t < tiles.size(); ++t) {
-            if (!tileDone[t]) {
-                complete = false;
-                continue;
-            }
+            if (!tileDone[t]) continue;
             uint64_t tilePixels = uint64_t(tiles[t].x1 - tiles[t].x0) * uint64_t(tiles[t].y1 - tiles[t].y0);
             stats.samples += tilePixels * n;
             for (const SplatSink::Entry& e : splats[t].entries()) {
@@ -104,8 +172,10 @@ RenderStats renderImage(const RenderContext& ctx, const Integrator& integrator, 
         }
         s0 += n;
         passSpp = std::min(kMaxPassSpp, passSpp * (s0 >= 2 ? 2u : 1u));
-        if (opt.cancel && opt.cancel->load()) {
-            stats.interrupted = true;
+        bool stop = cancelled();
+        if (opt.onPassEnd) opt.onPassEnd(film, stateNow(/* withPartialPass = */ false), stop);
+        if (stop) {
+            stats.interrupted = s0 < target;
             break;
         }
     }
@@ -113,7 +183,8 @@ RenderStats renderImage(const RenderContext& ctx, const Integrator& integrator, 
     // Splats are estimates per camera sample of the whole image: divide by samples per pixel taken.
     film.setSplatSppDouble(pixelsTotal > 0 ? double(stats.samples) / double(pixelsTotal) : 0.0);
     stats.nonFiniteDropped = nonFinite.load();
-    stats.seconds = elapsed();
+    stats.firstNonFinite = firstNonFinite;
+    stats.seconds = st.seconds + elapsed();
     return stats;
 }
 

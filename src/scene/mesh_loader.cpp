@@ -5,8 +5,12 @@
 #include <algorithm>
 #include <bit>
 #include <charconv>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <string_view>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "core/error.h"
@@ -15,23 +19,54 @@
 namespace tessera {
 namespace {
 
+/// A number for messages: integers without decimals, others with enough digits to recognise.
+std::string num(double v) {
+    char buf[40];
+    bool exactInteger = v == std::floor(v) && std::abs(v) < 9007199254740992.0;  // 2^53
+    std::snprintf(buf, sizeof buf, exactInteger ? "%.0f" : "%.9g", v);
+    return buf;
+}
+
+std::string gib(uint64_t bytes) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g GiB", double(bytes) / double(uint64_t(1) << 30));
+    return buf;
+}
+
 /// Whole file as bytes; gzread passes uncompressed files through unchanged, so one path serves both.
-std::string readMaybeGzipped(const std::string& path) {
+/// Stops at `maxBytes` (a gzip bomb decompresses without bound otherwise).
+std::string readMaybeGzipped(const std::string& path, uint64_t maxBytes) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) throw SceneError(path, "", "cannot open file (missing or not a regular file)");
     gzFile f = gzopen(path.c_str(), "rb");
-    if (!f) throw SceneError(path, "", "cannot open file");
+    if (!f) throw SceneError(path, "", std::string("cannot open file: ") + std::strerror(errno));
     std::string data;
     char buf[1 << 16];
     int n;
-    while ((n = gzread(f, buf, sizeof buf)) > 0) data.append(buf, size_t(n));
-    bool failed = n < 0;
+    while ((n = gzread(f, buf, sizeof buf)) > 0) {
+        if (data.size() + size_t(n) > maxBytes) {
+            gzclose(f);
+            throw SceneError(path, "", "data exceeds the memory limit of " + gib(maxBytes) + " (after decompression)");
+        }
+        data.append(buf, size_t(n));
+    }
+    // A stream cut short reads as a clean end of file but leaves Z_BUF_ERROR behind.
+    int code = Z_OK;
+    const char* msg = gzerror(f, &code);
+    std::string failure;
+    if (n < 0 || (code != Z_OK && code != Z_STREAM_END)) {
+        std::string detail = msg ? msg : "read error";
+        if (detail.starts_with(path + ": ")) detail.erase(0, path.size() + 2);  // zlib prefixes the path
+        failure = "corrupt or truncated gzip stream (" + detail + ")";
+    }
     gzclose(f);
-    if (failed) throw SceneError(path, "", "read error (corrupt gzip stream?)");
+    if (!failure.empty()) throw SceneError(path, "", failure);
     return data;
 }
 
 enum class PlyType { Int8, Uint8, Int16, Uint16, Int32, Uint32, Float32, Float64 };
 
-PlyType parsePlyType(const std::string& path, const std::string& t) {
+PlyType parsePlyType(const std::string& path, const std::string& where, const std::string& t) {
     if (t == "char" || t == "int8") return PlyType::Int8;
     if (t == "uchar" || t == "uint8") return PlyType::Uint8;
     if (t == "short" || t == "int16") return PlyType::Int16;
@@ -40,7 +75,7 @@ PlyType parsePlyType(const std::string& path, const std::string& t) {
     if (t == "uint" || t == "uint32") return PlyType::Uint32;
     if (t == "float" || t == "float32") return PlyType::Float32;
     if (t == "double" || t == "float64") return PlyType::Float64;
-    throw SceneError(path, "header", "unknown PLY property type '" + t + "'");
+    throw SceneError(path, where, "unknown PLY property type '" + t + "'");
 }
 
 size_t plyTypeSize(PlyType t) {
@@ -53,6 +88,8 @@ size_t plyTypeSize(PlyType t) {
     return 0;
 }
 
+bool isIntegerType(PlyType t) { return t != PlyType::Float32 && t != PlyType::Float64; }
+
 struct PlyProperty {
     std::string name;
     bool isList = false;
@@ -61,20 +98,36 @@ struct PlyProperty {
 
 struct PlyElement {
     std::string name;
-    size_t count = 0;
+    uint64_t count = 0;
     std::vector<PlyProperty> properties;
 };
 
-/// Reads values of any PLY type from ASCII tokens or binary bytes of either endianness.
+/// Reads values of any PLY type from ASCII tokens or binary bytes of either endianness. Errors
+/// name the element and row being read.
 class PlyReader {
 public:
     PlyReader(const std::string& path, const std::string& data, size_t pos, int format)
         : path_(path), data_(data), pos_(pos), format_(format) {}
 
+    void setRow(const std::string& element, uint64_t row) {
+        element_ = &element;
+        row_ = row;
+    }
+    [[noreturn]] void fail(const std::string& problem) const {
+        throw SceneError(path_, "element " + *element_ + ", row " + std::to_string(row_), problem);
+    }
+    size_t bytesLeft() const { return data_.size() - pos_; }
+
     double read(PlyType t) {
-        if (format_ == 0) return readAscii();
+        double v = format_ == 0 ? readAscii() : readBinary(t);
+        if (isIntegerType(t) && format_ == 0 && v != std::floor(v)) fail("'" + num(v) + "' is not an integer");
+        return v;
+    }
+
+private:
+    double readBinary(PlyType t) {
         size_t size = plyTypeSize(t);
-        if (pos_ + size > data_.size()) throw SceneError(path_, "body", "file ends early");
+        if (size > bytesLeft()) fail("file ends early (truncated)");
         unsigned char bytes[8];
         std::memcpy(bytes, data_.data() + pos_, size);
         pos_ += size;
@@ -92,14 +145,17 @@ public:
         }
         return 0.0;
     }
-
-private:
     double readAscii() {
         while (pos_ < data_.size() && std::isspace(static_cast<unsigned char>(data_[pos_]))) ++pos_;
-        if (pos_ >= data_.size()) throw SceneError(path_, "body", "file ends early");
+        if (pos_ >= data_.size()) fail("file ends early (truncated)");
         double v = 0.0;
         auto [end, ec] = std::from_chars(data_.data() + pos_, data_.data() + data_.size(), v);
-        if (ec != std::errc()) throw SceneError(path_, "body", "not a number near byte " + std::to_string(pos_));
+        if (ec == std::errc::result_out_of_range) fail("number out of range near byte " + std::to_string(pos_));
+        if (ec != std::errc()) {
+            size_t stop = pos_;
+            while (stop < data_.size() && stop - pos_ < 20 && !std::isspace(static_cast<unsigned char>(data_[stop]))) ++stop;
+            fail("'" + data_.substr(pos_, stop - pos_) + "' is not a number (byte " + std::to_string(pos_) + ")");
+        }
         pos_ = size_t(end - data_.data());
         return v;
     }
@@ -108,16 +164,12 @@ private:
     const std::string& data_;
     size_t pos_;
     int format_;  // 0 ascii, 1 binary little endian, 2 binary big endian
+    const std::string* element_ = nullptr;
+    uint64_t row_ = 0;
 };
 
 void addPolygon(TriangleMesh& mesh, const std::vector<uint32_t>& poly) {
     for (size_t k = 2; k < poly.size(); ++k) mesh.triangles.emplace_back(poly[0], poly[k - 1], poly[k]);
-}
-
-void checkIndices(const std::string& path, const TriangleMesh& mesh) {
-    for (const glm::uvec3& t : mesh.triangles)
-        if (t.x >= mesh.positions.size() || t.y >= mesh.positions.size() || t.z >= mesh.positions.size())
-            throw SceneError(path, "faces", "vertex index out of range");
 }
 
 std::string lowerExtension(const std::string& path) {
@@ -127,36 +179,58 @@ std::string lowerExtension(const std::string& path) {
     return std::filesystem::path(p).extension().string();
 }
 
-}  // namespace
+/// A non-negative integer header field ("element vertex 8"); anything else is an error.
+uint64_t parseCount(const std::string& path, const std::string& where, const std::string& text) {
+    uint64_t v = 0;
+    auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (text.empty() || ec != std::errc() || end != text.data() + text.size())
+        throw SceneError(path, where, "element count '" + text + "' is not a non-negative integer");
+    return v;
+}
 
-TriangleMesh loadPlyMesh(const std::string& path) {
-    std::string data = readMaybeGzipped(path);
-    if (!data.starts_with("ply")) throw SceneError(path, "", "not a PLY file");
-    size_t headerEnd = data.find("end_header");
-    if (headerEnd == std::string::npos) throw SceneError(path, "header", "no end_header");
-    size_t bodyStart = data.find('\n', headerEnd);
-    if (bodyStart == std::string::npos) throw SceneError(path, "header", "no data after end_header");
-    ++bodyStart;
+/// Smallest number of bytes one row of `e` can take: binary sizes, or one digit and one separator
+/// per ASCII value (a list at least its count).
+uint64_t minimumRowBytes(const PlyElement& e, int format) {
+    uint64_t n = 0;
+    for (const PlyProperty& p : e.properties) n += format == 0 ? 2 : plyTypeSize(p.isList ? p.countType : p.type);
+    return n;
+}
 
-    std::istringstream header(data.substr(0, headerEnd));
-    std::vector<PlyElement> elements;
+struct PlyHeader {
     int format = -1;
-    std::string line;
-    while (std::getline(header, line)) {
+    std::vector<PlyElement> elements;
+    size_t bodyStart = 0;
+};
+
+PlyHeader parsePlyHeader(const std::string& path, const std::string& data) {
+    if (!data.starts_with("ply")) throw SceneError(path, "", "not a PLY file (no 'ply' magic line)");
+    PlyHeader h;
+    size_t pos = 0;
+    for (int lineNo = 1;; ++lineNo) {
+        if (pos >= data.size()) throw SceneError(path, "header", "no end_header line (file truncated?)");
+        size_t eol = data.find('\n', pos);
+        if (eol == std::string::npos) throw SceneError(path, "header line " + std::to_string(lineNo), "file ends inside the header");
+        std::string line = data.substr(pos, eol - pos);
+        pos = eol + 1;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        std::string where = "header line " + std::to_string(lineNo);
         std::istringstream ls(line);
         std::string word;
         ls >> word;
+        if (word == "end_header") break;
         if (word == "format") {
             std::string f;
             ls >> f;
-            format = f == "ascii" ? 0 : f == "binary_little_endian" ? 1 : f == "binary_big_endian" ? 2 : -1;
-            if (format < 0) throw SceneError(path, "header", "unknown format '" + f + "'");
+            h.format = f == "ascii" ? 0 : f == "binary_little_endian" ? 1 : f == "binary_big_endian" ? 2 : -1;
+            if (h.format < 0) throw SceneError(path, where, "unknown format '" + f + "'");
         } else if (word == "element") {
             PlyElement e;
-            ls >> e.name >> e.count;
-            elements.push_back(e);
+            std::string count;
+            if (!(ls >> e.name >> count)) throw SceneError(path, where, "'element' needs a name and a count");
+            e.count = parseCount(path, where, count);
+            h.elements.push_back(e);
         } else if (word == "property") {
-            if (elements.empty()) throw SceneError(path, "header", "property before any element");
+            if (h.elements.empty()) throw SceneError(path, where, "property before any element");
             PlyProperty p;
             std::string t;
             ls >> t;
@@ -164,22 +238,57 @@ TriangleMesh loadPlyMesh(const std::string& path) {
                 std::string ct, it;
                 ls >> ct >> it >> p.name;
                 p.isList = true;
-                p.countType = parsePlyType(path, ct);
-                p.type = parsePlyType(path, it);
+                p.countType = parsePlyType(path, where, ct);
+                p.type = parsePlyType(path, where, it);
+                if (!isIntegerType(p.countType)) throw SceneError(path, where, "list count type '" + ct + "' is not an integer type");
             } else {
-                p.type = parsePlyType(path, t);
+                p.type = parsePlyType(path, where, t);
                 ls >> p.name;
             }
-            elements.back().properties.push_back(p);
+            if (p.name.empty()) throw SceneError(path, where, "property without a name");
+            h.elements.back().properties.push_back(p);
+        } else if (word != "comment" && word != "obj_info" && !word.empty() && word != "ply") {
+            throw SceneError(path, where, "unknown header keyword '" + word + "'");
         }
     }
-    if (format < 0) throw SceneError(path, "header", "no format line");
+    if (h.format < 0) throw SceneError(path, "header", "no format line");
+    h.bodyStart = pos;
+    return h;
+}
+
+}  // namespace
+
+TriangleMesh loadPlyMesh(const std::string& path, const MeshLoadOptions& options) {
+    std::string data = readMaybeGzipped(path, options.maxBytes);
+    PlyHeader header = parsePlyHeader(path, data);
+
+    // Allocation bombs: a declared count must fit both the bytes the file has and the memory limit.
+    uint64_t bodyBytes = data.size() - header.bodyStart, minimumBody = 0, vertexCount = 0;
+    bool vertexCountKnown = false;
+    for (const PlyElement& e : header.elements) {
+        std::string where = "element " + e.name;
+        uint64_t row = minimumRowBytes(e, header.format);
+        if (row > 0 && e.count > (bodyBytes - std::min(bodyBytes, minimumBody)) / row)
+            throw SceneError(path, where,
+                             "declares " + std::to_string(e.count) + " rows, but the " + std::to_string(bodyBytes) +
+                                 " bytes of data after the header hold at most " +
+                                 std::to_string((bodyBytes - std::min(bodyBytes, minimumBody)) / row) + " (truncated file or bad count)");
+        minimumBody += e.count * row;
+        uint64_t perRow = e.name == "vertex" ? sizeof(Vec3f) : e.name == "face" ? sizeof(glm::uvec3) : 0;
+        if (perRow > 0 && e.count > options.maxBytes / perRow)
+            throw SceneError(path, where, std::to_string(e.count) + " rows need more than the memory limit of " + gib(options.maxBytes));
+        if (e.name == "vertex") {
+            vertexCount = e.count;
+            vertexCountKnown = true;
+        }
+    }
 
     TriangleMesh mesh;
     mesh.name = std::filesystem::path(path).filename().string();
-    PlyReader reader(path, data, bodyStart, format);
+    PlyReader reader(path, data, header.bodyStart, header.format);
     std::vector<uint32_t> poly;
-    for (const PlyElement& e : elements) {
+    bool sawVertex = false, sawFace = false;
+    for (const PlyElement& e : header.elements) {
         bool isVertex = e.name == "vertex", isFace = e.name == "face";
         int xi = -1, yi = -1, zi = -1;
         for (int i = 0; i < int(e.properties.size()); ++i) {
@@ -187,75 +296,127 @@ TriangleMesh loadPlyMesh(const std::string& path) {
             if (e.properties[i].name == "y") yi = i;
             if (e.properties[i].name == "z") zi = i;
         }
-        if (isVertex && (xi < 0 || yi < 0 || zi < 0)) throw SceneError(path, "vertex", "needs x, y and z");
-        if (isVertex) mesh.positions.reserve(e.count);
-        if (isFace) mesh.triangles.reserve(e.count);
-        for (size_t n = 0; n < e.count; ++n) {
+        if (isVertex && (xi < 0 || yi < 0 || zi < 0)) throw SceneError(path, "element vertex", "needs properties x, y and z");
+        if (isVertex && (e.properties[xi].isList || e.properties[yi].isList || e.properties[zi].isList))
+            throw SceneError(path, "element vertex", "x, y and z must not be lists");
+        sawVertex |= isVertex;
+        sawFace |= isFace;
+        if (isVertex) mesh.positions.reserve(size_t(e.count));
+        if (isFace) mesh.triangles.reserve(size_t(e.count));
+        for (uint64_t n = 0; n < e.count; ++n) {
+            reader.setRow(e.name, n);
             Vec3f pos(0.f);
             bool faceDone = false;
             for (int i = 0; i < int(e.properties.size()); ++i) {
                 const PlyProperty& p = e.properties[i];
                 if (p.isList) {
-                    size_t k = size_t(reader.read(p.countType));
+                    double count = reader.read(p.countType);
+                    if (count < 0) reader.fail("negative list length " + num(count));
+                    // Every item takes at least one byte: a count beyond the data left is a lie.
+                    if (count > double(reader.bytesLeft())) reader.fail("list length " + num(count) + " exceeds the data left");
+                    size_t k = size_t(count);
                     bool indices = isFace && !faceDone && (p.name == "vertex_indices" || p.name == "vertex_index");
                     poly.clear();
                     for (size_t j = 0; j < k; ++j) {
                         double v = reader.read(p.type);
-                        if (indices) {
-                            if (v < 0) throw SceneError(path, "face " + std::to_string(n), "negative vertex index");
-                            poly.push_back(uint32_t(v));
-                        }
+                        if (!indices) continue;
+                        if (!(v >= 0) || v != std::floor(v)) reader.fail("vertex index " + num(v) + " is not a non-negative integer");
+                        // Compared as doubles and printed with num(): converting an out-of-range double
+                        // to an integer is undefined behaviour (found by tools/fuzz.sh).
+                        if ((vertexCountKnown && v >= double(vertexCount)) || v > double(0xfffffffeu))
+                            reader.fail("vertex index " + num(v) + " out of range (the file has " +
+                                        std::to_string(vertexCount) + " vertices)");
+                        poly.push_back(uint32_t(v));
                     }
-                    if (indices) addPolygon(mesh, poly), faceDone = true;
+                    if (indices) {
+                        if (k < 3) reader.fail("face with " + std::to_string(k) + " vertices (at least 3 needed)");
+                        addPolygon(mesh, poly);
+                        faceDone = true;
+                    }
                 } else {
                     double v = reader.read(p.type);
-                    if (isVertex && i == xi) pos.x = float(v);
-                    if (isVertex && i == yi) pos.y = float(v);
-                    if (isVertex && i == zi) pos.z = float(v);
+                    if (isVertex && (i == xi || i == yi || i == zi)) {
+                        // Checked before the conversion: a double beyond float range makes float(v) undefined.
+                        if (!(std::abs(v) <= double(std::numeric_limits<float>::max())))
+                            reader.fail("non-finite coordinate " + p.name + " = " + num(v) + (std::isfinite(v) ? " (beyond float range)" : ""));
+                        (i == xi ? pos.x : i == yi ? pos.y : pos.z) = float(v);
+                    }
                 }
             }
             if (isVertex) mesh.positions.push_back(pos);
         }
     }
-    checkIndices(path, mesh);
+    if (!sawVertex) throw SceneError(path, "header", "no 'vertex' element");
+    if (!sawFace) throw SceneError(path, "header", "no 'face' element (point clouds cannot be traced)");
     return mesh;
 }
 
-TriangleMesh loadObjMesh(const std::string& path) {
-    std::string data = readMaybeGzipped(path);
+TriangleMesh loadObjMesh(const std::string& path, const MeshLoadOptions& options) {
+    std::string data = readMaybeGzipped(path, options.maxBytes);
     TriangleMesh mesh;
     mesh.name = std::filesystem::path(path).filename().string();
-    std::istringstream in(data);
-    std::string line;
     std::vector<uint32_t> poly;
-    size_t lineNo = 0;
-    while (std::getline(in, line)) {
+    // OBJ lets a face name vertices defined further down: check those at the end, with their line.
+    std::vector<std::pair<size_t, uint64_t>> forwardReferences;  // (line, largest index)
+    size_t lineNo = 0, pos = 0;
+    auto fail = [&](const std::string& problem) -> void { throw SceneError(path, "line " + std::to_string(lineNo), problem); };
+    while (pos < data.size()) {
+        size_t eol = data.find('\n', pos);
+        if (eol == std::string::npos) eol = data.size();
+        std::string_view line(data.data() + pos, eol - pos);
+        pos = eol + 1;
         ++lineNo;
-        std::istringstream ls(line);
-        std::string tag;
-        ls >> tag;
+        auto next = [&](size_t& i) {  // next whitespace-separated token of the line
+            while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+            size_t b = i;
+            while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+            return line.substr(b, i - b);
+        };
+        size_t i = 0;
+        std::string_view tag = next(i);
         if (tag == "v") {
-            Vec3f p;
-            if (!(ls >> p.x >> p.y >> p.z)) throw SceneError(path, "line " + std::to_string(lineNo), "bad vertex");
-            mesh.positions.push_back(p);
+            float xyz[3];
+            for (float& c : xyz) {
+                std::string_view t = next(i);
+                auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), c);
+                if (ec == std::errc::result_out_of_range) fail("vertex coordinate '" + std::string(t) + "' is beyond float range");
+                if (t.empty() || ec != std::errc() || end != t.data() + t.size())
+                    fail("bad vertex coordinate '" + std::string(t) + "' (need 'v x y z')");
+                if (!std::isfinite(c)) fail("non-finite vertex coordinate '" + std::string(t) + "'");
+            }
+            if (mesh.positions.size() >= options.maxBytes / sizeof(Vec3f)) fail("vertices exceed the memory limit of " + gib(options.maxBytes));
+            mesh.positions.emplace_back(xyz[0], xyz[1], xyz[2]);
         } else if (tag == "f") {
             poly.clear();
-            std::string item;
-            while (ls >> item) {
-                long idx = std::strtol(item.c_str(), nullptr, 10);  // "i", "i/t", "i/t/n", "i//n"
-                if (idx < 0) idx += long(mesh.positions.size()) + 1;  // relative to the vertices so far
-                if (idx <= 0) throw SceneError(path, "line " + std::to_string(lineNo), "bad face index '" + item + "'");
+            uint64_t largest = 0;
+            for (std::string_view item = next(i); !item.empty(); item = next(i)) {
+                std::string_view first = item.substr(0, item.find('/'));  // "i", "i/t", "i/t/n", "i//n"
+                int64_t idx = 0;
+                auto [end, ec] = std::from_chars(first.data(), first.data() + first.size(), idx);
+                if (first.empty() || ec != std::errc() || end != first.data() + first.size() || idx == 0)
+                    fail("bad face index '" + std::string(item) + "'");
+                if (idx < 0) idx += int64_t(mesh.positions.size()) + 1;  // relative to the vertices so far
+                if (idx <= 0) fail("relative face index '" + std::string(item) + "' points before the first vertex");
+                if (idx > int64_t(0xffffffffu)) fail("face index '" + std::string(item) + "' out of range");
+                largest = std::max(largest, uint64_t(idx));
                 poly.push_back(uint32_t(idx - 1));
             }
+            if (poly.size() < 3) fail("face with " + std::to_string(poly.size()) + " vertices (at least 3 needed)");
+            if (largest > mesh.positions.size()) forwardReferences.emplace_back(lineNo, largest);
             addPolygon(mesh, poly);
         }
     }
-    checkIndices(path, mesh);
+    for (const auto& [line, largest] : forwardReferences)
+        if (largest > mesh.positions.size())
+            throw SceneError(path, "line " + std::to_string(line),
+                             "face index " + std::to_string(largest) + " out of range (the file has " +
+                                 std::to_string(mesh.positions.size()) + " vertices)");
+    if (mesh.triangles.empty()) throw SceneError(path, "", "no faces");
     return mesh;
 }
 
 SceneGeometry loadGeometryFile(const std::string& path, std::optional<CameraDesc>& camera,
-                               std::vector<std::string>& warnings) {
+                               std::vector<std::string>& warnings, const MeshLoadOptions& options) {
     std::string ext = lowerExtension(path);
     SceneGeometry g;
     if (ext == ".gltf" || ext == ".glb") {
@@ -264,9 +425,9 @@ SceneGeometry loadGeometryFile(const std::string& path, std::optional<CameraDesc
         g.meshes = std::move(scene.geometry.meshes);
         g.spheres = std::move(scene.geometry.spheres);
     } else if (ext == ".ply") {
-        g.meshes.push_back(loadPlyMesh(path));
+        g.meshes.push_back(loadPlyMesh(path, options));
     } else if (ext == ".obj") {
-        g.meshes.push_back(loadObjMesh(path));
+        g.meshes.push_back(loadObjMesh(path, options));
     } else {
         throw InputError(path + ": unknown file type (expected .gltf, .glb, .ply, .ply.gz or .obj)");
     }

@@ -12,16 +12,27 @@
 
 namespace tessera {
 
+struct MeshLoadOptions {
+    /// Refuse files (after gzip decompression) and declared element counts whose data would need
+    /// more memory than this, before allocating it (allocation bombs).
+    uint64_t maxBytes = uint64_t(16) << 30;
+};
+
 /// Reads a PLY file (optionally .gz): the `vertex` element's x, y, z and the `face` element's vertex
-/// index list. Throws SceneError on malformed input or out-of-range indices.
-TriangleMesh loadPlyMesh(const std::string& path);
+/// index list. Throws SceneError "FILE: element NAME, row R: PROBLEM" (rows counted from 0, like
+/// PLY's vertex indices) or "FILE: header line L: PROBLEM" on malformed input: truncated data, bad
+/// header, counts over the memory limit or the file's size, non-finite coordinates, indices out
+/// of range, a corrupt gzip stream.
+TriangleMesh loadPlyMesh(const std::string& path, const MeshLoadOptions& options = {});
 
 /// Reads `v` and `f` records of an OBJ file (negative indices allowed; texture/normal indices ignored).
-TriangleMesh loadObjMesh(const std::string& path);
+/// Throws SceneError "FILE: line L: PROBLEM" on a malformed record, a non-finite coordinate or an
+/// index out of range.
+TriangleMesh loadObjMesh(const std::string& path, const MeshLoadOptions& options = {});
 
 /// Geometry of a glTF scene (.gltf/.glb, with its camera when it has one), PLY or OBJ file, chosen by
 /// extension. Non-fatal problems go to `warnings`.
 SceneGeometry loadGeometryFile(const std::string& path, std::optional<CameraDesc>& camera,
-                               std::vector<std::string>& warnings);
+                               std::vector<std::string>& warnings, const MeshLoadOptions& options = {});
 
 }  // namespace tessera

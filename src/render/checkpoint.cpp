@@ -1,0 +1,299 @@
+#include "render/checkpoint.h"
+
+#include <unistd.h>
+#include <zlib.h>
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+
+#include "core/error.h"
+#include "render/interrupt.h"
+
+namespace tessera {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr char kMagic[8] = {'T', 'E', 'S', 'S', 'C', 'K', 'P', 'T'};
+constexpr uint32_t kFormatVersion = 1;
+constexpr uint32_t kByteOrderMark = 0x01020304u;
+/// magic + version + byte-order mark + header length + payload length + CRC.
+constexpr uint64_t kFramingBytes = 8 + 4 + 4 + 8 + 8 + 4;
+
+struct FileCloser {
+    void operator()(FILE* f) const {
+        if (f) std::fclose(f);
+    }
+};
+using File = std::unique_ptr<FILE, FileCloser>;
+
+/// Appends bytes to a file and keeps the running CRC-32 of everything written.
+class Writer {
+public:
+    Writer(FILE* f, const std::string& path) : f_(f), path_(path) {}
+    void bytes(const void* p, size_t n) {
+        if (n == 0) return;
+        if (std::fwrite(p, 1, n, f_) != n) throw InputError(path_ + ": cannot write checkpoint: " + std::strerror(errno));
+        // crc32_z takes a size_t length; chunk anyway so huge films never depend on that.
+        const auto* b = static_cast<const Bytef*>(p);
+        for (size_t done = 0; done < n;) {
+            size_t k = std::min<size_t>(n - done, size_t(1) << 30);
+            crc_ = crc32(crc_, b + done, uInt(k));
+            done += k;
+        }
+    }
+    template <class T>
+    void value(const T& v) {
+        bytes(&v, sizeof v);
+    }
+    template <class T>
+    void array(const std::vector<T>& v) {
+        bytes(v.data(), v.size() * sizeof(T));
+    }
+    uint32_t crc() const { return uint32_t(crc_); }
+
+private:
+    FILE* f_;
+    const std::string& path_;
+    uLong crc_ = crc32(0L, Z_NULL, 0);
+};
+
+/// Reads what Writer wrote, failing with "truncated" rather than reading past the end.
+class Reader {
+public:
+    Reader(FILE* f, const std::string& path, uint64_t size) : f_(f), path_(path), left_(size) {}
+    void bytes(void* p, size_t n, const char* what) {
+        if (n > left_) throw InputError(path_ + ": checkpoint is truncated (ends inside the " + std::string(what) + ")");
+        if (n > 0 && std::fread(p, 1, n, f_) != n)
+            throw InputError(path_ + ": cannot read checkpoint (" + what + "): " + std::strerror(errno));
+        left_ -= n;
+        const auto* b = static_cast<const Bytef*>(p);
+        for (size_t done = 0; done < n;) {
+            size_t k = std::min<size_t>(n - done, size_t(1) << 30);
+            crc_ = crc32(crc_, b + done, uInt(k));
+            done += k;
+        }
+    }
+    template <class T>
+    T value(const char* what) {
+        T v;
+        bytes(&v, sizeof v, what);
+        return v;
+    }
+    template <class T>
+    void array(std::vector<T>& v, const char* what) {
+        bytes(v.data(), v.size() * sizeof(T), what);
+    }
+    uint64_t left() const { return left_; }
+    uint32_t crc() const { return uint32_t(crc_); }
+
+private:
+    FILE* f_;
+    const std::string& path_;
+    uint64_t left_;
+    uLong crc_ = crc32(0L, Z_NULL, 0);
+};
+
+std::string headerText(const CheckpointHeader& header) {
+    std::string text;
+    for (const auto& [key, value] : header) text += key + "=" + value + "\n";
+    return text;
+}
+
+CheckpointHeader parseHeader(const std::string& text) {
+    CheckpointHeader h;
+    size_t pos = 0;
+    while (pos < text.size()) {
+        size_t eol = text.find('\n', pos);
+        if (eol == std::string::npos) eol = text.size();
+        std::string line = text.substr(pos, eol - pos);
+        size_t eq = line.find('=');
+        if (eq != std::string::npos) h.emplace_back(line.substr(0, eq), line.substr(eq + 1));
+        pos = eol + 1;
+    }
+    return h;
+}
+
+/// Bytes of the payload for this film and state (what the writer writes, what the reader expects).
+uint64_t payloadBytes(const Film& film, const RenderState& s) {
+    uint64_t pixels = uint64_t(film.width()) * uint64_t(film.height());
+    uint64_t n = 4 + 4 + 4 + 4 + 8 + 8 + 8 + 1 + 4 + 4 + 4 + 4 + 1;
+    if (!s.tileDone.empty()) {
+        n += s.tileDone.size();
+        for (const auto& e : s.pendingSplats) n += 8 + e.size() * sizeof(SplatSink::Entry);
+    }
+    return n + pixels * (9 * sizeof(double) + sizeof(uint32_t));
+}
+
+static_assert(sizeof(SplatSink::Entry) == 16, "checkpoint splat entries are 4-byte index + 3 floats");
+
+}  // namespace
+
+void writeCheckpoint(const std::string& path, const CheckpointHeader& header, const Film& film,
+                     const RenderState& state) {
+    const fs::path parent = fs::path(path).parent_path();
+    if (!parent.empty()) {
+        std::error_code ec;
+        fs::create_directories(parent, ec);
+        if (ec) throw InputError(path + ": cannot create directory " + parent.string() + ": " + ec.message());
+    }
+    const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+    // A second Ctrl-C exits at once from the signal handler: let it remove the temporary file.
+    TemporaryFileForSignal signalCleanup(tmp);
+    struct Remove {
+        const std::string* p;
+        ~Remove() {
+            if (p) {
+                std::error_code ignored;
+                fs::remove(*p, ignored);
+            }
+        }
+    } remove{&tmp};
+    {
+        File f(std::fopen(tmp.c_str(), "wb"));
+        if (!f) throw InputError(path + ": cannot write checkpoint: " + std::strerror(errno));
+        Writer w(f.get(), path);
+        w.bytes(kMagic, sizeof kMagic);
+        w.value(kFormatVersion);
+        w.value(kByteOrderMark);
+        std::string text = headerText(header);
+        w.value(uint64_t(text.size()));
+        w.bytes(text.data(), text.size());
+        w.value(payloadBytes(film, state));
+
+        w.value(uint32_t(film.width()));
+        w.value(uint32_t(film.height()));
+        w.value(state.sppDone);
+        w.value(state.passSpp);
+        w.value(state.samples);
+        w.value(state.nonFinite);
+        w.value(state.seconds);
+        w.value(uint8_t(state.firstNonFinite ? 1 : 0));
+        SampleId first = state.firstNonFinite.value_or(SampleId{});
+        w.value(int32_t(first.x));
+        w.value(int32_t(first.y));
+        w.value(first.sample);
+        w.value(uint32_t(state.tileDone.size()));
+        w.value(uint8_t(state.tileDone.empty() ? 0 : 1));
+        if (!state.tileDone.empty()) {
+            w.array(state.tileDone);
+            for (const auto& entries : state.pendingSplats) {
+                w.value(uint64_t(entries.size()));
+                w.array(entries);
+            }
+        }
+        w.array(film.sumData());
+        w.array(film.sumSqData());
+        w.array(film.splatData());
+        w.array(film.countData());
+        uint32_t crc = w.crc();
+        if (std::fwrite(&crc, sizeof crc, 1, f.get()) != 1 || std::fflush(f.get()) != 0 || ::fsync(fileno(f.get())) != 0)
+            throw InputError(path + ": cannot write checkpoint: " + std::strerror(errno));
+        FILE* raw = f.release();
+        if (std::fclose(raw) != 0) throw InputError(path + ": cannot finish writing checkpoint: " + std::strerror(errno));
+    }
+    std::error_code ec;
+    fs::rename(tmp, path, ec);
+    if (ec) throw InputError(path + ": cannot replace checkpoint: " + ec.message());
+    remove.p = nullptr;
+}
+
+RenderState readCheckpoint(const std::string& path, const CheckpointHeader& expected, Film& film) {
+    std::error_code ec;
+    uint64_t size = fs::file_size(path, ec);
+    if (ec) throw InputError(path + ": no checkpoint to resume (" + ec.message() + "); render with --checkpoint SEC first");
+    File f(std::fopen(path.c_str(), "rb"));
+    if (!f) throw InputError(path + ": cannot open checkpoint: " + std::strerror(errno));
+    Reader r(f.get(), path, size);
+
+    char magic[8];
+    r.bytes(magic, sizeof magic, "magic number");
+    if (std::memcmp(magic, kMagic, sizeof magic) != 0) throw InputError(path + ": not a Tessera checkpoint");
+    uint32_t version = r.value<uint32_t>("format version");
+    uint32_t bom = r.value<uint32_t>("byte-order mark");
+    if (bom != kByteOrderMark) throw InputError(path + ": checkpoint was written on a machine of the other byte order");
+    if (version != kFormatVersion)
+        throw InputError(path + ": checkpoint format version " + std::to_string(version) + ", this tessera reads version " +
+                         std::to_string(kFormatVersion));
+    uint64_t headerBytes = r.value<uint64_t>("header length");
+    if (headerBytes > r.left()) throw InputError(path + ": checkpoint is truncated (ends inside the header)");
+    std::string text(headerBytes, '\0');
+    r.bytes(text.data(), text.size(), "header");
+
+    // Verify the checksum over the whole file before trusting any length or value in it.
+    uint64_t payload = r.value<uint64_t>("payload length");
+    if (payload != r.left() - std::min<uint64_t>(r.left(), 4))
+        throw InputError(path + ": checkpoint is truncated or has trailing bytes (" + std::to_string(size) + " bytes, expected " +
+                         std::to_string(kFramingBytes + headerBytes + payload) + ")");
+    {
+        long bodyStart = std::ftell(f.get());
+        uLong crc = r.crc();
+        std::vector<char> buf(1 << 20);
+        uint64_t left = payload;
+        while (left > 0) {
+            size_t k = size_t(std::min<uint64_t>(left, buf.size()));
+            if (std::fread(buf.data(), 1, k, f.get()) != k) throw InputError(path + ": cannot read checkpoint payload");
+            crc = crc32(crc, reinterpret_cast<const Bytef*>(buf.data()), uInt(k));
+            left -= k;
+        }
+        uint32_t stored = 0;
+        if (std::fread(&stored, sizeof stored, 1, f.get()) != 1) throw InputError(path + ": checkpoint is truncated (no checksum)");
+        if (uint32_t(crc) != stored) throw InputError(path + ": checkpoint is corrupt (CRC-32 mismatch)");
+        std::fseek(f.get(), bodyStart, SEEK_SET);
+    }
+
+    // Settings: the first that differs is named with both values.
+    CheckpointHeader found = parseHeader(text);
+    for (const auto& [key, value] : expected) {
+        auto it = std::find_if(found.begin(), found.end(), [&](const auto& kv) { return kv.first == key; });
+        std::string have = it == found.end() ? "(absent)" : it->second;
+        if (have != value)
+            throw InputError(path + ": checkpoint does not match this render: " + key + " is '" + have +
+                             "' in the checkpoint, '" + value + "' now");
+    }
+
+    uint32_t width = r.value<uint32_t>("resolution"), height = r.value<uint32_t>("resolution");
+    if (int64_t(width) != film.width() || int64_t(height) != film.height())
+        throw InputError(path + ": checkpoint film is " + std::to_string(width) + "x" + std::to_string(height) + ", this render " +
+                         std::to_string(film.width()) + "x" + std::to_string(film.height()));
+    RenderState s;
+    s.sppDone = r.value<uint32_t>("state");
+    s.passSpp = r.value<uint32_t>("state");
+    s.samples = r.value<uint64_t>("state");
+    s.nonFinite = r.value<uint64_t>("state");
+    s.seconds = r.value<double>("state");
+    bool hasFirst = r.value<uint8_t>("state") != 0;
+    SampleId first;
+    first.x = r.value<int32_t>("state");
+    first.y = r.value<int32_t>("state");
+    first.sample = r.value<uint32_t>("state");
+    if (hasFirst) s.firstNonFinite = first;
+    uint32_t tiles = r.value<uint32_t>("state");
+    bool partial = r.value<uint8_t>("state") != 0;
+    if (s.passSpp == 0 || s.passSpp > 16) throw InputError(path + ": checkpoint is corrupt (pass of " + std::to_string(s.passSpp) + " spp)");
+    const uint64_t pixels = uint64_t(width) * height;
+    if (partial) {
+        if (tiles > r.left()) throw InputError(path + ": checkpoint is truncated (ends inside the tile list)");
+        s.tileDone.resize(tiles);
+        r.array(s.tileDone, "tile list");
+        s.pendingSplats.resize(tiles);
+        for (auto& entries : s.pendingSplats) {
+            uint64_t n = r.value<uint64_t>("splats");
+            if (n > r.left() / sizeof(SplatSink::Entry)) throw InputError(path + ": checkpoint is truncated (ends inside the splats)");
+            entries.resize(n);
+            r.array(entries, "splats");
+            for (const SplatSink::Entry& e : entries)
+                if (e.pixelIndex >= pixels) throw InputError(path + ": checkpoint is corrupt (splat outside the image)");
+        }
+    }
+    r.array(film.sumData(), "film sums");
+    r.array(film.sumSqData(), "film sums of squares");
+    r.array(film.splatData(), "film splats");
+    r.array(film.countData(), "film sample counts");
+    if (r.left() != 4) throw InputError(path + ": checkpoint is corrupt (payload size does not match its contents)");
+    return s;
+}
+
+}  // namespace tessera
