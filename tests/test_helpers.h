@@ -2,6 +2,7 @@
 // Small helpers shared by the tests: procedural scenes and paths to the project's files.
 #include <filesystem>
 #include <string>
+#include <unistd.h>
 
 #include "render/film.h"
 #include "scene/scene.h"
@@ -12,7 +13,10 @@ inline std::string sourcePath(const std::string& relative) { return std::string(
 
 /// A fresh, empty temporary directory for one test.
 inline std::filesystem::path tempDir(const std::string& name) {
-    std::filesystem::path p = std::filesystem::temp_directory_path() / ("tessera-test-" + name);
+    // The process id keeps two suites running at once (two checkouts, or CI jobs sharing /tmp)
+    // from deleting each other's files.
+    std::filesystem::path p =
+        std::filesystem::temp_directory_path() / ("tessera-test-" + name + "-" + std::to_string(::getpid()));
     std::filesystem::remove_all(p);
     std::filesystem::create_directories(p);
     return p;

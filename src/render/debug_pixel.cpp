@@ -83,7 +83,7 @@ private:
 SampleReplay replaySample(const RenderContext& ctx, const Integrator& integrator, SampleId id, uint64_t seed,
                           std::ostream& trace) {
     // The render's worker threads run with flush-to-zero (renderer.cpp); so must the replay.
-    enableFlushToZero();
+    ScopedFlushToZero ftz;
     TracingAccel accel(ctx.accel, ctx.scene, trace);
     RenderContext traced{ctx.scene, accel, ctx.camera, ctx.maxDepth};
     trace << "tessera: debug: replaying pixel (" << id.x << "," << id.y << ") sample " << id.sample << " seed " << seed

@@ -109,12 +109,12 @@ RenderStats renderImage(const RenderContext& ctx, const Integrator& integrator, 
         int passStart = 0, passEnd = 0;  // addresses for the TSan hand-off annotations only
         tsanRelease(&passStart);
         arena.execute([&] {
-            enableFlushToZero();
+            ScopedFlushToZero ftz;
             tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
                 // FTZ/DAZ in whichever thread runs the tile (MXCSR is per thread): a few cycles per
                 // tile. Set here rather than by a tbb::task_scheduler_observer, whose proxy oneTBB
                 // 2021.8 leaks when the arena goes away (LeakSanitizer, tools/sanitize.sh).
-                enableFlushToZero();
+                ScopedFlushToZero tileFtz;
                 tsanAcquire(&passStart);
                 for (size_t t = r.begin(); t != r.end(); ++t) {
                     if (tileDone[t]) continue;
