@@ -19,8 +19,14 @@ run("install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/prefi
 if(NOT EXISTS ${WORK_DIR}/prefix/include/tessera/tessera.h)
   message(FATAL_ERROR "the install has no include/tessera/tessera.h")
 endif()
+# A sanitizer build of the library needs the same sanitizers in the program that loads it (the
+# ASan runtime must be the first library loaded).
+set(san_flags "")
+if(SANITIZE)
+  set(san_flags -DCMAKE_CXX_FLAGS=-fsanitize=${SANITIZE} -DCMAKE_EXE_LINKER_FLAGS=-fsanitize=${SANITIZE})
+endif()
 run("configure consumer" ${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/consumer -B ${WORK_DIR}/build
-    -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release)
+    -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release ${san_flags})
 run("build consumer" ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run("run consumer" ${WORK_DIR}/build/consumer ${SCENE})
 message("${last_output}")
