@@ -137,19 +137,26 @@ void writePng(const std::string& path, int width, int height, const float* rgba,
 }
 
 Image readImage(const std::string& path) {
-    OIIO::ImageBuf file(path);
-    if (!file.read(/* subimage = */ 0, /* miplevel = */ 0, /* force = */ true,
-                   OIIO::TypeDesc::FLOAT)) {
-        std::string detail = file.geterror();
-        if (detail.empty()) detail = OIIO::geterror();
-        throw InputError(path + ": cannot read image: " + detail);
+    // ImageInput, not ImageBuf: an ImageBuf reads through OIIO's process-wide ImageCache, which
+    // keeps serving a file's old pixels when it is rewritten within the same second (a resumed
+    // render's output read back by the test that read the interrupted one).
+    std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
+    if (!in) {
+        std::string detail = OIIO::geterror();
+        throw InputError(path + ": cannot read image: " + (detail.empty() ? "unknown format" : detail));
     }
-    const OIIO::ImageSpec& spec = file.spec();
+    const OIIO::ImageSpec spec = in->spec();
     const int channels = spec.nchannels;
     const int alpha = spec.alpha_channel;
+    if (spec.width <= 0 || spec.height <= 0 || channels <= 0)
+        throw InputError(path + ": cannot read image: empty or channel-less image");
+    std::vector<float> pixels(std::size_t(spec.width) * std::size_t(spec.height) * std::size_t(channels));
+    if (!in->read_image(/* subimage = */ 0, /* miplevel = */ 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data())) {
+        throw InputError(path + ": cannot read pixels: " + in->geterror());
+    }
+    in->close();
 
-    // channels() builds the RGBA image in one pass: an index picks a source channel, -1 takes the
-    // constant from `fill`.
+    // A source channel per RGBA output channel; -1 takes the constant from `fill`.
     int order[4] = {0, 1, 2, alpha};
     const float fill[4] = {0.0f, 0.0f, 0.0f, 1.0f};
     if (channels < 3) {
@@ -159,18 +166,15 @@ Image readImage(const std::string& path) {
     } else if (alpha < 3) {
         order[3] = -1;  // No alpha, or an "alpha" among the first three: treat as opaque RGB.
     }
-    OIIO::ImageBuf rgbaBuf = OIIO::ImageBufAlgo::channels(file, 4, order, fill);
-    if (rgbaBuf.has_error()) {
-        throw InputError(path + ": cannot convert to RGBA: " + rgbaBuf.geterror());
-    }
 
     Image image;
     image.width = spec.width;
     image.height = spec.height;
-    image.rgba.resize(4 * std::size_t(image.width) * std::size_t(image.height));
-    if (!rgbaBuf.get_pixels(rgbaBuf.roi(), OIIO::TypeDesc::FLOAT, image.rgba.data())) {
-        throw InputError(path + ": cannot read pixels: " + rgbaBuf.geterror());
-    }
+    const std::size_t n = std::size_t(image.width) * std::size_t(image.height);
+    image.rgba.resize(4 * n);
+    for (std::size_t p = 0; p < n; ++p)
+        for (int c = 0; c < 4; ++c)
+            image.rgba[4 * p + c] = order[c] >= 0 ? pixels[p * std::size_t(channels) + std::size_t(order[c])] : fill[c];
     for (const OIIO::ParamValue& param : spec.extra_attribs) {
         image.metadata.emplace_back(param.name().string(), param.get_string());
     }
