@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "accel/bvh_simd.h"
+#include "accel/triangle4.h"
 #include "geometry/intersect.h"
 
 namespace tessera {
@@ -82,86 +83,11 @@ struct BoxRay {
     }
 };
 
-/// Per-ray constants of the watertight test (Woop et al. 2013, Section 3.1, computed once per ray
-/// instead of once per triangle); the arithmetic below repeats intersectTriangle's operation for
-/// operation, so both give bit-identical t, u, v.
-struct TriRay {
-    int kx, ky, kz;
-    float tMin;
-    // Splatted once per ray: selecting o[kx] with a run-time index inside every leaf test compiled
-    // to a chain of compares and branches ahead of each leaf's first load.
-    Vf4 ox, oy, oz, sx, sy, sz;
-    explicit TriRay(const Ray& ray) : tMin(ray.tMin) {
-        Vec3f ad = glm::abs(ray.d);
-        kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-        kx = (kz + 1) % 3;
-        ky = (kx + 1) % 3;
-        if (ray.d[kz] < 0.f) std::swap(kx, ky);
-        sx = splat4(ray.d[kx] / ray.d[kz]);
-        sy = splat4(ray.d[ky] / ray.d[kz]);
-        sz = splat4(1.f / ray.d[kz]);
-        ox = splat4(ray.o[kx]), oy = splat4(ray.o[ky]), oz = splat4(ray.o[kz]);
-    }
-};
-
-struct TriangleCandidate {
-    float t, u, v;
-    int lane;
-};
-
-/// Watertight test of one ray against four triangles (Woop et al. 2013, Fig. 1/Listing 1, four lanes
-/// at once). Returns the nearest lane hit in (tMin, tMax), or lane −1.
-template <bool kAnyHit>
-TESSERA_INLINE TriangleCandidate intersectTriangle4Impl(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
-    const int kx = r.kx, ky = r.ky, kz = r.kz;
-    const Vf4 ox = r.ox, oy = r.oy, oz = r.oz, sx = r.sx, sy = r.sy, sz = r.sz;
-    Vf4 aX = load4(tri.p[0][kx]) - ox, aY = load4(tri.p[0][ky]) - oy, aZ = load4(tri.p[0][kz]) - oz;
-    Vf4 bX = load4(tri.p[1][kx]) - ox, bY = load4(tri.p[1][ky]) - oy, bZ = load4(tri.p[1][kz]) - oz;
-    Vf4 cX = load4(tri.p[2][kx]) - ox, cY = load4(tri.p[2][ky]) - oy, cZ = load4(tri.p[2][kz]) - oz;
-    Vf4 ax = aX - sx * aZ, ay = aY - sy * aZ;
-    Vf4 bx = bX - sx * bZ, by = bY - sy * bZ;
-    Vf4 cx = cX - sx * cZ, cy = cY - sy * cZ;
-    Vf4 U = cx * by - cy * bx;
-    Vf4 V = ax * cy - ay * cx;
-    Vf4 W = bx * ay - by * ax;
-    Vf4 zero{};
-    uint32_t zeroLanes = moveMask4((U == zero) | (V == zero) | (W == zero));
-    if (zeroLanes) [[unlikely]] {
-        // An edge function is exactly 0: redo it in double precision (paper, Section 3.3), so that
-        // edges shared by two triangles are neither missed nor hit twice.
-        for (int i = 0; i < 4; ++i) {
-            if (!(zeroLanes >> i & 1)) continue;
-            U[i] = float(double(cx[i]) * double(by[i]) - double(cy[i]) * double(bx[i]));
-            V[i] = float(double(ax[i]) * double(cy[i]) - double(ay[i]) * double(cx[i]));
-            W[i] = float(double(bx[i]) * double(ay[i]) - double(by[i]) * double(ax[i]));
-        }
-    }
-    Vi4 sameSign = ((U >= zero) & (V >= zero) & (W >= zero)) | ((U <= zero) & (V <= zero) & (W <= zero));
-    Vf4 det = U + V + W;
-    Vi4 valid = sameSign & (det != zero);
-    if (!moveMask4(valid)) return {0.f, 0.f, 0.f, -1};
-    Vf4 T = U * (sz * aZ) + V * (sz * bZ) + W * (sz * cZ);
-    Vf4 invDet = splat4(1.f) / det;
-    Vf4 t = T * invDet;
-    valid &= (t > splat4(r.tMin)) & (t < splat4(tMax));
-    uint32_t bits = moveMask4(valid);
-    // Any-hit queries only need to know that some lane hit (same arithmetic, so the same answer
-    // as the closest-hit test): no serial search for the nearest lane, no barycentrics.
-    if constexpr (kAnyHit) return {0.f, 0.f, 0.f, bits ? __builtin_ctz(bits) : -1};
-    TriangleCandidate best{tMax, 0.f, 0.f, -1};
-    while (bits) {
-        int i = __builtin_ctz(bits);
-        bits &= bits - 1;
-        if (t[i] < best.t) best = {t[i], V[i] * invDet[i], W[i] * invDet[i], i};
-    }
-    return best;
-}
-
 TESSERA_INLINE TriangleCandidate intersectTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
-    return intersectTriangle4Impl<false>(r, tri, tMax);
+    return tessera::intersectTriangle4<false>(r, tri.p, tMax);
 }
 TESSERA_INLINE bool occludedTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
-    return intersectTriangle4Impl<true>(r, tri, tMax).lane >= 0;
+    return tessera::intersectTriangle4<true>(r, tri.p, tMax).lane >= 0;
 }
 
 Bounds3f paddedSphereBounds(const Sphere& s) {

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "accel/bvh_simd.h"
+#include "accel/triangle4.h"
 #include "accel/kdtree_accel.h"
 #include "geometry/intersect.h"
 
@@ -36,75 +37,12 @@ struct StackEntry {
     float tMin, tMax;
 };
 
-/// Per-ray constants of the watertight test (Woop, Benthin & Wald 2013, Section 3.1), once per ray.
-struct TriRay {
-    int kx, ky, kz;
-    float sx, sy, sz;
-    Vec3f o;
-    float tMin;
-    explicit TriRay(const Ray& ray) : o(ray.o), tMin(ray.tMin) {
-        Vec3f ad = glm::abs(ray.d);
-        kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-        kx = (kz + 1) % 3;
-        ky = (kx + 1) % 3;
-        if (ray.d[kz] < 0.f) std::swap(kx, ky);
-        sx = ray.d[kx] / ray.d[kz];
-        sy = ray.d[ky] / ray.d[kz];
-        sz = 1.f / ray.d[kz];
-    }
-};
+using Candidate = TriangleCandidate;
 
-struct Candidate {
-    float t, u, v;
-    int lane;
-};
-
-/// Watertight test of one ray against four triangles. The arithmetic repeats intersectTriangle
-/// (geometry/intersect.cpp) operation for operation, four lanes at once, so t, u, v are bit-identical
-/// to the brute-force backend. Returns the nearest lane hit in (tMin, tMax), or lane −1; with
-/// `kAnyHit` any hitting lane.
+/// The shared watertight 4-triangle test (accel/triangle4.h) on one of our leaf blocks.
 template <bool kAnyHit>
-inline __attribute__((always_inline)) Candidate intersect4(const TriRay& r, const KdTreeAccel::Triangle4& tri, float tMax) {
-    const int kx = r.kx, ky = r.ky, kz = r.kz;
-    Vf4 ox = splat4(r.o[kx]), oy = splat4(r.o[ky]), oz = splat4(r.o[kz]);
-    Vf4 sx = splat4(r.sx), sy = splat4(r.sy), sz = splat4(r.sz);
-    Vf4 aX = load4(tri.p[0][kx]) - ox, aY = load4(tri.p[0][ky]) - oy, aZ = load4(tri.p[0][kz]) - oz;
-    Vf4 bX = load4(tri.p[1][kx]) - ox, bY = load4(tri.p[1][ky]) - oy, bZ = load4(tri.p[1][kz]) - oz;
-    Vf4 cX = load4(tri.p[2][kx]) - ox, cY = load4(tri.p[2][ky]) - oy, cZ = load4(tri.p[2][kz]) - oz;
-    Vf4 ax = aX - sx * aZ, ay = aY - sy * aZ;
-    Vf4 bx = bX - sx * bZ, by = bY - sy * bZ;
-    Vf4 cx = cX - sx * cZ, cy = cY - sy * cZ;
-    Vf4 U = cx * by - cy * bx;
-    Vf4 V = ax * cy - ay * cx;
-    Vf4 W = bx * ay - by * ax;
-    Vf4 zero{};
-    uint32_t zeroLanes = moveMask4((U == zero) | (V == zero) | (W == zero));
-    if (zeroLanes) [[unlikely]] {
-        // An edge function is exactly 0: redo it in double precision (Woop et al., Section 3.3).
-        for (int i = 0; i < 4; ++i) {
-            if (!(zeroLanes >> i & 1)) continue;
-            U[i] = float(double(cx[i]) * double(by[i]) - double(cy[i]) * double(bx[i]));
-            V[i] = float(double(ax[i]) * double(cy[i]) - double(ay[i]) * double(cx[i]));
-            W[i] = float(double(bx[i]) * double(ay[i]) - double(by[i]) * double(ax[i]));
-        }
-    }
-    Vi4 sameSign = ((U >= zero) & (V >= zero) & (W >= zero)) | ((U <= zero) & (V <= zero) & (W <= zero));
-    Vf4 det = U + V + W;
-    Vi4 valid = sameSign & (det != zero);
-    if (!moveMask4(valid)) return {0.f, 0.f, 0.f, -1};
-    Vf4 T = U * (sz * aZ) + V * (sz * bZ) + W * (sz * cZ);
-    Vf4 invDet = splat4(1.f) / det;
-    Vf4 t = T * invDet;
-    valid &= (t > splat4(r.tMin)) & (t < splat4(tMax));
-    uint32_t bits = moveMask4(valid);
-    if constexpr (kAnyHit) return {0.f, 0.f, 0.f, bits ? __builtin_ctz(bits) : -1};
-    Candidate best{tMax, 0.f, 0.f, -1};
-    while (bits) {
-        int i = __builtin_ctz(bits);
-        bits &= bits - 1;
-        if (t[i] < best.t) best = {t[i], V[i] * invDet[i], W[i] * invDet[i], i};
-    }
-    return best;
+TESSERA_INLINE Candidate intersect4(const TriRay& r, const KdTreeAccel::Triangle4& tri, float tMax) {
+    return intersectTriangle4<kAnyHit>(r, tri.p, tMax);
 }
 
 }  // namespace
