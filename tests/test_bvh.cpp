@@ -14,6 +14,7 @@
 #include "core/rng.h"
 #include "scene/gltf_loader.h"
 #include "scene/mesh_loader.h"
+#include "accel_pathologies.h"
 #include "test_helpers.h"
 
 using namespace tessera;
@@ -119,20 +120,7 @@ TEST(Bvh, MatchesEmbreeWithSceneSpanningTriangles) {
 TEST(Bvh, MatchesEmbreeWithTrianglesOnSplitPlanes) {
     // Axis-aligned triangles lying exactly on the planes a 32-bin (and 16-bin) builder considers:
     // the centroid bounds are [0, 1] on every axis, so planes sit at multiples of 1/32.
-    TriangleMesh m;
-    for (int axis = 0; axis < 3; ++axis)
-        for (int k = 0; k <= 32; ++k) {
-            float c = float(k) / 32.f;
-            Vec3f a(0.f), b(0.f), d(0.f);
-            int u = (axis + 1) % 3, v = (axis + 2) % 3;
-            a[axis] = b[axis] = d[axis] = c;
-            a[u] = 0.1f, a[v] = 0.1f;
-            b[u] = 0.9f, b[v] = 0.1f;
-            d[u] = 0.5f, d[v] = 0.9f;
-            addTriangle(m, a, b, d);
-        }
-    SceneGeometry g;
-    g.meshes.push_back(m);
+    SceneGeometry g = test::axisAlignedTriangles();
     expectMatchesEmbree(g, 3000, "split planes");
     BvhConfig bins16;
     bins16.binCount = 16;
