@@ -63,25 +63,9 @@ void expectMatchesEmbree(const SceneGeometry& g, size_t raysPerKind, const std::
     }
 }
 
-SceneGeometry coplanarGrid() {
-    TriangleMesh m;
-    const int n = 40;
-    for (int y = 0; y <= n; ++y)
-        for (int x = 0; x <= n; ++x) m.positions.push_back(Vec3f(float(x), float(y), 0.f) / float(n));
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-            uint32_t i = uint32_t(y * (n + 1) + x);
-            m.triangles.emplace_back(i, i + 1, i + n + 2);
-            m.triangles.emplace_back(i, i + n + 2, i + n + 1);
-        }
-    SceneGeometry g;
-    g.meshes.push_back(m);
-    return g;
-}
-
 }  // namespace
 
-TEST(Bvh, MatchesEmbreeOnCoplanarGrid) { expectMatchesEmbree(coplanarGrid(), 3000, "coplanar grid"); }
+TEST(Bvh, MatchesEmbreeOnCoplanarGrid) { expectMatchesEmbree(test::coplanarGrid(), 3000, "coplanar grid"); }
 
 TEST(Bvh, MatchesEmbreeOnDuplicatedTriangles) {
     SceneGeometry g;
