@@ -8,11 +8,16 @@
 
 namespace tessera {
 
-std::vector<std::string> accelNames() { return {"embree", "bvh", "kdtree", "brute"}; }
+std::vector<std::string> accelNames() { return {"embree", "bvh", "sbvh", "kdtree", "brute"}; }
 
 std::unique_ptr<Accel> createAccel(std::string_view name, const SceneGeometry& geometry, const AccelOptions& options) {
     if (name == "embree") return std::make_unique<EmbreeAccel>(geometry, options);
     if (name == "bvh") return std::make_unique<BvhAccel>(geometry, options);
+    if (name == "sbvh") {
+        BvhConfig config;
+        config.spatialSplits = true;
+        return std::make_unique<BvhAccel>(geometry, options, config);
+    }
     if (name == "kdtree") return std::make_unique<KdTreeAccel>(geometry, options);
     if (name == "brute") return std::make_unique<BruteForceAccel>(geometry);
     std::string known;

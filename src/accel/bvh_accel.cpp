@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "accel/bvh_simd.h"
+#include "accel/bvh_spatial.h"
 #include "accel/triangle4.h"
 #include "geometry/intersect.h"
 
@@ -155,7 +156,36 @@ BvhAccel::BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, c
     }
 
     BinaryBvh bin;
-    auto buildTree = [&] { bin = buildBinaryBvh(primBounds, centroids, config_); };
+    // SBVH: the part of a primitive inside a box, padded like the whole primitive's box above.
+    ClipToBox clip = [&](uint32_t i, const Bounds3f& box) {
+        PrimRef p = prims_[i];
+        if (p.geomId == geometry.sphereGeomId()) {
+            Bounds3f s = paddedSphereBounds(geometry.spheres[p.primId]);
+            s.lower = glm::max(s.lower, box.lower), s.upper = glm::min(s.upper, box.upper);
+            return s;
+        }
+        const TriangleMesh& mesh = geometry.meshes[p.geomId];
+        const glm::uvec3& t = mesh.triangles[p.primId];
+        Bounds3f b = clipTriangleBounds(mesh.positions[t.x], mesh.positions[t.y], mesh.positions[t.z], box);
+        if (b.empty()) return b;
+        Vec3f pad = 0x1p-20f * glm::max(glm::abs(b.lower), glm::abs(b.upper));
+        b.lower -= pad;
+        b.upper += pad;
+        return b;
+    };
+    std::vector<Vec3f> triangleVertices;
+    if (config_.spatialSplits) {
+        triangleVertices.resize(3 * prims_.size(), Vec3f(kNaN));
+        for (size_t i = 0; i < prims_.size(); ++i) {
+            if (prims_[i].geomId == geometry.sphereGeomId()) continue;
+            const TriangleMesh& mesh = geometry.meshes[prims_[i].geomId];
+            for (int v = 0; v < 3; ++v) triangleVertices[3 * i + v] = mesh.positions[mesh.triangles[prims_[i].primId][v]];
+        }
+    }
+    auto buildTree = [&] {
+        bin = config_.spatialSplits ? buildSpatialSplitBvh(primBounds, triangleVertices, clip, config_)
+                                    : buildBinaryBvh(primBounds, centroids, config_);
+    };
     if (options.threads > 0) tbb::task_arena(options.threads).execute(buildTree);
     else buildTree();
 
@@ -462,6 +492,13 @@ bool BvhAccel::intersect(const Ray& ray, Hit& hit) const {
 
 bool BvhAccel::occluded(const Ray& ray) const { return useAvx2_ ? occludedAvx2(ray) : occludedImpl<false>(ray); }
 
+size_t BvhAccel::referenceCount() const {
+    size_t n = mixedPrims_.size();
+    for (const Triangle4& t : triangles_)
+        for (int lane = 0; lane < 4; ++lane) n += t.primId[lane] != kInvalidId;
+    return n;
+}
+
 uint64_t BvhAccel::structureHash() const {
     uint64_t h = 0xcbf29ce484222325ULL;
     auto add = [&](const void* data, size_t bytes) {
@@ -493,13 +530,25 @@ std::string BvhAccel::checkInvariants() const {
         return glm::all(glm::greaterThanEqual(in.lower, out.lower)) && glm::all(glm::lessThanEqual(in.upper, out.upper));
     };
     std::string problem;
+    std::vector<std::vector<Bounds3f>> leafBoxesOf(config_.spatialSplits ? prims_.size() : 0);
     auto visitPrim = [&](PrimRef p, const Bounds3f& leafBox) {
         if (p.geomId >= denseOf.size() || p.primId >= denseOf[p.geomId].size() || denseOf[p.geomId][p.primId] == kInvalidId) {
             problem = "leaf references an unknown primitive";
             return;
         }
-        if (seen[denseOf[p.geomId][p.primId]]++) problem = "primitive " + std::to_string(p.primId) + " reached twice";
-        if (!inside(primBox(p), leafBox)) problem = "primitive " + std::to_string(p.primId) + " outside its leaf box";
+        uint32_t dense = denseOf[p.geomId][p.primId];
+        bool again = seen[dense];
+        seen[dense] = 1;
+        if (config_.spatialSplits) leafBoxesOf[dense].push_back(leafBox);
+        if (!config_.spatialSplits) {
+            if (again) problem = "primitive " + std::to_string(p.primId) + " reached twice";
+            if (!inside(primBox(p), leafBox)) problem = "primitive " + std::to_string(p.primId) + " outside its leaf box";
+        } else {
+            // Spatial splits reference a primitive from several leaves, each holding a clipped part.
+            Bounds3f b = primBox(p);
+            b.lower = glm::max(b.lower, leafBox.lower), b.upper = glm::min(b.upper, leafBox.upper);
+            if (b.empty()) problem = "primitive " + std::to_string(p.primId) + " does not meet its leaf box";
+        }
     };
     std::vector<std::pair<uint32_t, Bounds3f>> todo;
     if (!nodes_.empty()) {
@@ -535,6 +584,26 @@ std::string BvhAccel::checkInvariants() const {
     if (!problem.empty()) return problem;
     for (size_t i = 0; i < seen.size(); ++i)
         if (!seen[i]) return "primitive " + std::to_string(prims_[i].primId) + " of geometry " + std::to_string(prims_[i].geomId) + " unreachable";
+    // With spatial splits each leaf holds only a clipped part of a triangle: together the parts'
+    // boxes must still cover it. Checked on a barycentric grid (vertices and edges included).
+    for (size_t i = 0; i < leafBoxesOf.size(); ++i) {
+        if (prims_[i].geomId == geometry_.sphereGeomId()) continue;
+        const TriangleMesh& m = geometry_.meshes[prims_[i].geomId];
+        const glm::uvec3& t = m.triangles[prims_[i].primId];
+        constexpr int kGrid = 6;
+        for (int a = 0; a <= kGrid; ++a)
+            for (int b = 0; a + b <= kGrid; ++b) {
+                float u = float(a) / kGrid, v = float(b) / kGrid;
+                Vec3f x = (1.f - u - v) * m.positions[t.x] + u * m.positions[t.y] + v * m.positions[t.z];
+                Bounds3f point;
+                point.extend(x);
+                bool covered = false;
+                for (const Bounds3f& box : leafBoxesOf[i]) covered |= inside(point, box);
+                if (!covered)
+                    return "triangle " + std::to_string(prims_[i].primId) + " not covered by its leaves' boxes at (" +
+                           std::to_string(u) + ", " + std::to_string(v) + ")";
+            }
+    }
     return {};
 }
 

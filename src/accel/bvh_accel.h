@@ -16,7 +16,7 @@ class BvhAccel final : public Accel {
 public:
     BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, const BvhConfig& config = {});
 
-    std::string_view name() const override { return "bvh"; }
+    std::string_view name() const override { return config_.spatialSplits ? "sbvh" : "bvh"; }
     bool intersect(const Ray& ray, Hit& hit) const override;
     bool occluded(const Ray& ray) const override;
     Bounds3f bounds() const override { return bounds_; }
@@ -26,9 +26,13 @@ public:
     /// Which traversal kernels run: "avx2" or "sse2/portable".
     std::string_view isa() const;
     /// Checks the tree: every primitive with finite bounds reachable exactly once, each child box
-    /// inside its parent's box, every primitive inside its leaf's box. Returns "" or the first problem.
+    /// inside its parent's box, every primitive inside its leaf's box (with spatial splits: reachable
+    /// at least once, and meeting each leaf box that holds it). Returns "" or the first problem.
     std::string checkInvariants() const;
     size_t nodeCount() const { return nodes_.size(); }
+    /// Primitive references in the leaves: the primitive count, or more where spatial splits
+    /// placed parts of a primitive in several leaves.
+    size_t referenceCount() const;
     /// FNV-1a hash of the nodes and leaf blocks: equal for equal trees (determinism tests).
     uint64_t structureHash() const;
 

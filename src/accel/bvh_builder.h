@@ -38,6 +38,13 @@ struct BvhConfig {
     /// Beyond this depth splits are object medians, which bounds the depth (and traversal stacks)
     /// even for pathological inputs where SAH peels off one primitive at a time.
     int maxSahDepth = 48;
+    /// Spatial splits (SBVH, bvh_spatial.h; `--accel sbvh`): off in the default build.
+    bool spatialSplits = false;
+    /// Extra references spatial splits may create, as a fraction of the primitive count.
+    float spatialSplitBudget = 0.3f;
+    /// Spatial splits are tried only where the best object split's children overlap by more than
+    /// this fraction of the root's surface area (Stich et al. 2009, α = 1e-5).
+    float spatialSplitAlpha = 1e-5f;
 };
 
 /// One node of the binary tree. Inner: `count == 0`, children at `left` and `right`. Leaf: primitives
