@@ -10,12 +10,6 @@
 
 namespace tessera {
 
-float KdNode::split() const {
-    float f;
-    std::memcpy(&f, &word0, 4);
-    return f;
-}
-
 KdNode KdNode::inner(int axis, float split, uint32_t aboveChild) {
     KdNode n;
     std::memcpy(&n.word0, &split, 4);

@@ -66,6 +66,12 @@ bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
         padT[a] = ray.d[a] != 0.f ? eps * std::abs(invD[a]) : 0.f;
         upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
     }
+    // Per-axis values as plain arrays for the inner loop: glm's operator[] with a run-time index
+    // compiles to a switch, i.e. an unpredictable three-way branch on the axis at every node.
+    float orgA[4], invA[4], padA[4];
+    uint32_t downMask[4];
+    for (int a = 0; a < 3; ++a) orgA[a] = ray.o[a], invA[a] = invD[a], padA[a] = padT[a], downMask[a] = upward[a] ? 0u : ~0u;
+    orgA[3] = invA[3] = padA[3] = 0.f, downMask[3] = 0u;
 
     // Clip the ray to the root cell grown by eps: conservative slabs (Ize 2013), NaN-safe operand
     // order (a 0·inf NaN, from an origin on a slab plane of a zero direction component, leaves the
@@ -101,13 +107,14 @@ bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
             __builtin_prefetch(nodes + node.aboveChild());
             const int a = node.axis();
             const float split = node.split();
-            const float tPlane = (split - ray.o[a]) * invD[a];
+            const float tPlane = (split - orgA[a]) * invA[a];
             // The ray is below the plane before tPlane when moving upward. NaN (origin in the plane,
             // direction parallel to it) fails both tests below: both children are visited.
-            const uint32_t firstChild = upward[a] ? index + 1 : node.aboveChild();
-            const uint32_t secondChild = upward[a] ? node.aboveChild() : index + 1;
-            const bool skipFirst = tMin > tPlane + padT[a];
-            const bool skipSecond = tPlane - padT[a] > tMax;
+            const uint32_t below = index + 1, above = node.aboveChild();
+            const uint32_t swap = (below ^ above) & downMask[a];
+            const uint32_t firstChild = below ^ swap, secondChild = above ^ swap;
+            const bool skipFirst = tMin > tPlane + padA[a];
+            const bool skipSecond = tPlane - padA[a] > tMax;
             // Branch-free step (the three-way choice is a coin toss for incoherent rays): the far
             // entry is always written and kept only when both children are visited.
             const bool both = !skipFirst && !skipSecond;
