@@ -187,6 +187,38 @@ TEST(KdTree, BuildIsDeterministicAndRetractsBadRefinements) {
     expectMatchesEmbree(g, 1000, "costly traversal", costly);
 }
 
+TEST(KdTree, BinnedUpperLevelsStayCloseToTheExactBuild) {
+    // The hybrid build bins nodes above `binnedAbove` references and sweeps events below. Against
+    // the pure W&H build (binnedAbove = 0) its tree must stay correct and within a few percent of
+    // the exact SAH cost; coarse bins and a low threshold stress the binned partition, including
+    // perfect splits of straddling slivers inside binned levels.
+    SceneGeometry sphere;
+    sphere.meshes.push_back(makeUvSphereMesh(Vec3f(0), 1.f, 100, 200, 0));
+    KdConfig exact;
+    exact.binnedAbove = 0;
+    KdTreeAccel exactTree(sphere, AccelOptions{}, exact), hybrid(sphere, AccelOptions{});
+    ASSERT_GT(sphere.primitiveCount(), 4 * size_t(KdConfig{}.binnedAbove));
+    EXPECT_EQ(exactTree.buildStats().refsBinned, 0u);
+    EXPECT_GT(hybrid.buildStats().refsBinned, sphere.primitiveCount());
+    EXPECT_LT(hybrid.buildStats().eventsSwept, exactTree.buildStats().eventsSwept);
+    EXPECT_LT(hybrid.buildStats().sahCost, 1.05 * exactTree.buildStats().sahCost);
+    expectMatchesEmbree(sphere, 2000, "uv sphere, hybrid build");
+
+    KdConfig coarse;
+    coarse.binnedAbove = 64;
+    coarse.binCount = 4;
+    KdTreeAccel coarseTree(sphere, AccelOptions{}, coarse);
+    EXPECT_GT(coarseTree.buildStats().refsBinned, hybrid.buildStats().refsBinned);
+    expectMatchesEmbree(sphere, 2000, "uv sphere, 4 bins above 64 references", coarse);
+    KdConfig binnedSlivers;
+    binnedSlivers.binnedAbove = 64;
+    SceneGeometry slivers = longSlivers(2000);
+    KdTreeAccel sliverTree(slivers, AccelOptions{}, binnedSlivers);
+    EXPECT_GT(sliverTree.buildStats().refsBinned, 0u);
+    EXPECT_GT(sliverTree.buildStats().references, slivers.primitiveCount());
+    expectMatchesEmbree(slivers, 2000, "slivers, binned above 64 references", binnedSlivers);
+}
+
 TEST(KdTree, DegenerateRaysAndClippedRanges) {
     SceneGeometry g;
     g.meshes.push_back(makeUvSphereMesh(Vec3f(0), 1.f, 8, 16, 0));

@@ -51,6 +51,16 @@ struct KdConfig {
     int maxBadRefines = 1;
     /// Clip straddling primitives to the child cells (W&H "perfect splits"); false keeps their boxes.
     bool perfectSplits = true;
+    /// Nodes with more primitives than this choose their split from `binCount` equal bins per axis
+    /// over their (clipped) primitive boxes instead of sweeping sorted events; at or below it, a
+    /// node sorts its events once and the exact W&H sweep takes over for its subtree. 0 sweeps
+    /// exactly everywhere (the pure W&H build). Binning touches each reference once per level with
+    /// no event lists to rewrite (Shevtsov et al. 2007 bin the top of their k-d trees the same
+    /// way); the big upper levels hardly need exact planes, while the levels near the surface,
+    /// where rays spend their steps, keep them. Both parts are O(n) per level: still O(N log N).
+    uint32_t binnedAbove = 4096;
+    /// Bins per axis for the binned levels (candidate planes at the bins' inner boundaries).
+    int binCount = 64;
 };
 
 /// The hard cap on depth (traversal stacks hold this many entries).
@@ -82,7 +92,8 @@ using KdClipFunction = std::function<Bounds3f(uint32_t prim, const Bounds3f& cel
 struct KdBuildStats {
     size_t innerNodes = 0, leaves = 0, emptyLeaves = 0, references = 0;
     size_t depthLimitHits = 0, retractions = 0;
-    size_t eventsSwept = 0;  ///< sum over nodes of their event-list lengths: the build's work
+    size_t eventsSwept = 0;  ///< sum over exact (swept) nodes of their event-list lengths
+    size_t refsBinned = 0;   ///< sum over binned nodes of their reference counts
     int maxDepth = 0, depthLimit = 0;
     double sahCost = 0.0;  ///< expected cost of the tree (root-relative SAH, no empty bonus)
 };
