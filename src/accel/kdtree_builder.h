@@ -36,7 +36,7 @@ struct KdConfig {
     /// Cost of intersecting one leaf block of `sahBlockSize` primitives.
     float intersectionCost = 1.5f;
     /// Primitives one leaf test handles together; 1 gives the classic per-primitive SAH.
-    int sahBlockSize = 4;
+    int sahBlockSize = 8;
     /// Fraction of the cost saved when one child is empty (W&H use λ = 0.8, i.e. 0.2; pbrt 0.5).
     float emptyBonus = 0.2f;
     /// The bonus needs an empty child at least this thick (fraction of the cell along the axis).

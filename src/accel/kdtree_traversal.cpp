@@ -8,7 +8,7 @@
 #include <cstring>
 
 #include "accel/bvh_simd.h"
-#include "accel/triangle4.h"
+#include "accel/triangle8.h"
 #include "accel/kdtree_accel.h"
 #include "geometry/intersect.h"
 
@@ -37,18 +37,12 @@ struct StackEntry {
     float tMin, tMax;
 };
 
-using Candidate = TriangleCandidate;
-
-/// The shared watertight 4-triangle test (accel/triangle4.h) on one of our leaf blocks.
-template <bool kAnyHit>
-TESSERA_INLINE Candidate intersect4(const TriRay& r, const KdTreeAccel::Triangle4& tri, float tMax) {
-    return intersectTriangle4<kAnyHit>(r, tri.p, tMax);
-}
+using Candidate = Triangle8Candidate;
 
 }  // namespace
 
 template <bool kAnyHit>
-bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
+TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
     if (nodes_.empty() || !isTraceableRay(ray)) return false;
     Vec3f invD;
     for (int a = 0; a < 3; ++a) invD[a] = 1.f / ray.d[a];  // ±inf for ±0.0
@@ -87,9 +81,9 @@ bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
     }
     if (!(tMin <= tMax)) return false;
 
-    TriRay triRay(ray);
+    TriRay8 triRay(ray);
     float tHit = ray.tMax;  // closest hit so far (closest-hit kernel)
-    const Triangle4* bestBlock = nullptr;
+    const TriangleBlock* bestBlock = nullptr;
     int bestLane = -1;
     uint32_t bestSphere = kInvalidId;
     PrimRef bestMixedTriangle{kInvalidId, kInvalidId};
@@ -127,9 +121,9 @@ bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
         // Leaf.
         const uint32_t count = node.word1 >> 3;
         if (!(node.word1 >> 2 & kMixedFlag)) {
-            const Triangle4* blocks = triangles_.data() + node.word0;
+            const TriangleBlock* blocks = triangles_.data() + node.word0;
             for (uint32_t b = 0; b < count; ++b) {
-                Candidate c = intersect4<kAnyHit>(triRay, blocks[b], tHit);
+                Candidate c = intersectTriangle8<kAnyHit>(triRay, blocks[b].p, tHit);
                 if (c.lane < 0) continue;
                 if constexpr (kAnyHit) return true;
                 tHit = c.t, bestU = c.u, bestV = c.v;
@@ -178,7 +172,7 @@ done:
             Vec3f p[3];
             for (int v = 0; v < 3; ++v) p[v] = {bestBlock->p[v][0][bestLane], bestBlock->p[v][1][bestLane], bestBlock->p[v][2][bestLane]};
             hit->t = tHit, hit->u = bestU, hit->v = bestV;
-            const PrimRef& id = blockIds_[size_t(bestBlock - triangles_.data()) * 4 + size_t(bestLane)];
+            const PrimRef& id = blockIds_[size_t(bestBlock - triangles_.data()) * kLanes + size_t(bestLane)];
             hit->geomId = id.geomId;
             hit->primId = id.primId;
             hit->ng = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
@@ -209,7 +203,17 @@ done:
     }
 }
 
-bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const { return traverse<false>(ray, &hit); }
-bool KdTreeAccel::occluded(const Ray& ray) const { return traverse<true>(ray, nullptr); }
+#if defined(TESSERA_X86)
+__attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return traverse<false>(ray, &hit); }
+__attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return traverse<true>(ray, nullptr); }
+#else
+bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return traverse<false>(ray, &hit); }
+bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return traverse<true>(ray, nullptr); }
+#endif
+
+bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const {
+    return useAvx2_ ? intersectAvx2(ray, hit) : traverse<false>(ray, &hit);
+}
+bool KdTreeAccel::occluded(const Ray& ray) const { return useAvx2_ ? occludedAvx2(ray) : traverse<true>(ray, nullptr); }
 
 }  // namespace tessera
