@@ -32,7 +32,7 @@ namespace tessera {
 /// defaults favour those (writeup.md §8d).
 struct KdConfig {
     /// Cost of one traversal step (inner node), relative to intersectionCost.
-    float traversalCost = 2.0f;
+    float traversalCost = 3.0f;
     /// Cost of intersecting one leaf block of `sahBlockSize` primitives.
     float intersectionCost = 1.5f;
     /// Primitives one leaf test handles together; 1 gives the classic per-primitive SAH.
