@@ -5,6 +5,8 @@
 /// every node sweeps them per axis with left/right/planar counts, and the sorted lists are split
 /// stably to the children; only primitives that straddle the chosen plane are clipped to the child
 /// cells ("perfect splits") and get freshly sorted events, merged into the children's lists.
+/// Nodes above `KdConfig::binnedAbove` references choose their plane by binning instead and sort
+/// their events only once they are small (a hybrid; still O(N log N)).
 ///
 /// Like the BVH builder it sees primitive *boxes* (so triangles and spheres share it); perfect
 /// splits additionally ask the caller to clip one primitive to a cell (`KdClipFunction`).
@@ -55,9 +57,10 @@ struct KdConfig {
     /// over their (clipped) primitive boxes instead of sweeping sorted events; at or below it, a
     /// node sorts its events once and the exact W&H sweep takes over for its subtree. 0 sweeps
     /// exactly everywhere (the pure W&H build). Binning touches each reference once per level with
-    /// no event lists to rewrite (Shevtsov et al. 2007 bin the top of their k-d trees the same
-    /// way); the big upper levels hardly need exact planes, while the levels near the surface,
-    /// where rays spend their steps, keep them. Both parts are O(n) per level: still O(N log N).
+    /// no event lists to rewrite (Shevtsov et al. 2007, "Highly parallel fast KD-tree
+    /// construction", bin k-d trees the same way); the big upper levels hardly need exact planes,
+    /// while the levels near the surface, where rays spend their steps, keep them. Both parts are
+    /// O(n) per level: still O(N log N).
     uint32_t binnedAbove = 4096;
     /// Bins per axis for the binned levels (candidate planes at the bins' inner boundaries).
     int binCount = 64;
