@@ -219,6 +219,34 @@ TEST(KdTree, BinnedUpperLevelsStayCloseToTheExactBuild) {
     expectMatchesEmbree(slivers, 2000, "slivers, binned above 64 references", binnedSlivers);
 }
 
+TEST(KdTree, PortableAndAvx2KernelsGiveTheSameBits) {
+    // The traversal is compiled for AVX2 and for the default target; both run the same arithmetic
+    // (no FMA contraction in either), so every hit record must be bit-identical.
+    SceneGeometry g;
+    g.meshes.push_back(makeUvSphereMesh(Vec3f(0), 1.f, 40, 80, 0));
+    g.meshes.push_back(makeUvSphereMesh(Vec3f(0.5f, 0.2f, 0.1f), 0.6f, 30, 60, 0));
+    KdTreeAccel fast(g, AccelOptions{}), portable(g, AccelOptions{});
+    portable.forcePortableKernels();
+    EXPECT_EQ(portable.isa(), "sse2/portable");
+    auto embree = createAccel("embree", g);
+    size_t hits = 0;
+    for (RayKind kind : kAllRayKinds)
+        for (const Ray& r : generateRays(g, *embree, kind, 2000, /*seed=*/5)) {
+            Hit a, b;
+            bool ha = fast.intersect(r, a), hb = portable.intersect(r, b);
+            ASSERT_EQ(ha, hb);
+            ASSERT_EQ(fast.occluded(r), portable.occluded(r));
+            if (!ha) continue;
+            ++hits;
+            EXPECT_EQ(a.t, b.t);
+            EXPECT_EQ(a.u, b.u);
+            EXPECT_EQ(a.v, b.v);
+            EXPECT_EQ(a.geomId, b.geomId);
+            EXPECT_EQ(a.primId, b.primId);
+        }
+    EXPECT_GT(hits, 2000u);
+}
+
 TEST(KdTree, DegenerateRaysAndClippedRanges) {
     SceneGeometry g;
     g.meshes.push_back(makeUvSphereMesh(Vec3f(0), 1.f, 8, 16, 0));

@@ -23,6 +23,10 @@ public:
     AccelStats stats() const override { return stats_; }
 
     const KdConfig& config() const { return config_; }
+    /// Which traversal runs: "avx2" or "sse2/portable" (the same arithmetic, so the same bits).
+    std::string_view isa() const { return useAvx2_ ? "avx2" : "sse2/portable"; }
+    /// Runs the portable kernels even where AVX2 is available (tests compare the two).
+    void forcePortableKernels() { useAvx2_ = false; }
     const KdBuildStats& buildStats() const { return buildStats_; }
     size_t nodeCount() const { return nodes_.size(); }
     /// The nodes (leaf payloads rewritten to leaf blocks, see kMixedFlag); node 0 is the root.
