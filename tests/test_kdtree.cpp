@@ -187,6 +187,66 @@ TEST(KdTree, BuildIsDeterministicAndRetractsBadRefinements) {
     expectMatchesEmbree(g, 1000, "costly traversal", costly);
 }
 
+TEST(KdTree, BinnedUpperLevelsStayCloseToTheExactBuild) {
+    // The hybrid build bins nodes above `binnedAbove` references and sweeps events below. Against
+    // the pure W&H build (binnedAbove = 0) its tree must stay correct and within a few percent of
+    // the exact SAH cost; coarse bins and a low threshold stress the binned partition, including
+    // perfect splits of straddling slivers inside binned levels.
+    SceneGeometry sphere;
+    sphere.meshes.push_back(makeUvSphereMesh(Vec3f(0), 1.f, 100, 200, 0));
+    KdConfig exact;
+    exact.binnedAbove = 0;
+    KdTreeAccel exactTree(sphere, AccelOptions{}, exact), hybrid(sphere, AccelOptions{});
+    ASSERT_GT(sphere.primitiveCount(), 4 * size_t(KdConfig{}.binnedAbove));
+    EXPECT_EQ(exactTree.buildStats().refsBinned, 0u);
+    EXPECT_GT(hybrid.buildStats().refsBinned, sphere.primitiveCount());
+    EXPECT_LT(hybrid.buildStats().eventsSwept, exactTree.buildStats().eventsSwept);
+    EXPECT_LT(hybrid.buildStats().sahCost, 1.05 * exactTree.buildStats().sahCost);
+    expectMatchesEmbree(sphere, 2000, "uv sphere, hybrid build");
+
+    KdConfig coarse;
+    coarse.binnedAbove = 64;
+    coarse.binCount = 4;
+    KdTreeAccel coarseTree(sphere, AccelOptions{}, coarse);
+    EXPECT_GT(coarseTree.buildStats().refsBinned, hybrid.buildStats().refsBinned);
+    expectMatchesEmbree(sphere, 2000, "uv sphere, 4 bins above 64 references", coarse);
+    KdConfig binnedSlivers;
+    binnedSlivers.binnedAbove = 64;
+    SceneGeometry slivers = longSlivers(2000);
+    KdTreeAccel sliverTree(slivers, AccelOptions{}, binnedSlivers);
+    EXPECT_GT(sliverTree.buildStats().refsBinned, 0u);
+    EXPECT_GT(sliverTree.buildStats().references, slivers.primitiveCount());
+    expectMatchesEmbree(slivers, 2000, "slivers, binned above 64 references", binnedSlivers);
+}
+
+TEST(KdTree, PortableAndAvx2KernelsGiveTheSameBits) {
+    // The traversal is compiled for AVX2 and for the default target; both run the same arithmetic
+    // (no FMA contraction in either), so every hit record must be bit-identical.
+    SceneGeometry g;
+    g.meshes.push_back(makeUvSphereMesh(Vec3f(0), 1.f, 40, 80, 0));
+    g.meshes.push_back(makeUvSphereMesh(Vec3f(0.5f, 0.2f, 0.1f), 0.6f, 30, 60, 0));
+    KdTreeAccel fast(g, AccelOptions{}), portable(g, AccelOptions{});
+    portable.forcePortableKernels();
+    EXPECT_EQ(portable.isa(), "sse2/portable");
+    auto embree = createAccel("embree", g);
+    size_t hits = 0;
+    for (RayKind kind : kAllRayKinds)
+        for (const Ray& r : generateRays(g, *embree, kind, 2000, /*seed=*/5)) {
+            Hit a, b;
+            bool ha = fast.intersect(r, a), hb = portable.intersect(r, b);
+            ASSERT_EQ(ha, hb);
+            ASSERT_EQ(fast.occluded(r), portable.occluded(r));
+            if (!ha) continue;
+            ++hits;
+            EXPECT_EQ(a.t, b.t);
+            EXPECT_EQ(a.u, b.u);
+            EXPECT_EQ(a.v, b.v);
+            EXPECT_EQ(a.geomId, b.geomId);
+            EXPECT_EQ(a.primId, b.primId);
+        }
+    EXPECT_GT(hits, 2000u);
+}
+
 TEST(KdTree, DegenerateRaysAndClippedRanges) {
     SceneGeometry g;
     g.meshes.push_back(makeUvSphereMesh(Vec3f(0), 1.f, 8, 16, 0));

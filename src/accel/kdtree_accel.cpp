@@ -93,6 +93,9 @@ Bounds3f clipTriangleBounds(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, c
 KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& options, const KdConfig& config)
     : geometry_(geometry), config_(config) {
     auto start = std::chrono::steady_clock::now();
+#if defined(__x86_64__) || defined(__i386__)
+    useAvx2_ = __builtin_cpu_supports("avx2");
+#endif
     bounds_ = geometry.bounds();
 
     std::vector<Bounds3f> primBounds;
@@ -139,7 +142,7 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
     if (!std::isfinite(sceneMagnitude_)) sceneMagnitude_ = 0.f;
     buildStats_ = tree.stats;
 
-    // Leaves become blocks of four triangles (or a scalar list when a sphere is among them).
+    // Leaves become blocks of kLanes triangles (or a scalar list when a sphere is among them).
     nodes_ = tree.nodes;
     triangles_.reserve(tree.primIndices.size() / 2 + 1);
     for (KdNode& node : nodes_) {
@@ -152,12 +155,12 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
             for (uint32_t k = 0; k < count; ++k) mixedPrims_.push_back(prims_[tree.primIndices[first + k]]);
             continue;
         }
-        uint32_t blocks = (count + 3) / 4;
+        uint32_t blocks = (count + kLanes - 1) / kLanes;
         node = KdNode::leaf(uint32_t(triangles_.size()), blocks << 1);
         for (uint32_t b = 0; b < blocks; ++b) {
-            Triangle4& t4 = triangles_.emplace_back();
-            for (int lane = 0; lane < 4; ++lane) {
-                uint32_t k = b * 4 + uint32_t(lane);
+            TriangleBlock& t4 = triangles_.emplace_back();
+            for (int lane = 0; lane < kLanes; ++lane) {
+                uint32_t k = b * kLanes + uint32_t(lane);
                 if (k >= count) {
                     for (int v = 0; v < 3; ++v)
                         for (int a = 0; a < 3; ++a) t4.p[v][a][lane] = kNaN;
@@ -179,7 +182,7 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
     primIndices_ = std::move(tree.primIndices);
 
     stats_.primitives = total;
-    stats_.memoryBytes = nodes_.size() * sizeof(KdNode) + triangles_.size() * sizeof(Triangle4) +
+    stats_.memoryBytes = nodes_.size() * sizeof(KdNode) + triangles_.size() * sizeof(TriangleBlock) +
                          blockIds_.size() * sizeof(PrimRef) +
                          mixedPrims_.size() * sizeof(PrimRef);
     stats_.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -192,7 +195,7 @@ uint64_t KdTreeAccel::structureHash() const {
         for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 0x100000001b3ULL;
     };
     add(nodes_.data(), nodes_.size() * sizeof(KdNode));
-    add(triangles_.data(), triangles_.size() * sizeof(Triangle4));
+    add(triangles_.data(), triangles_.size() * sizeof(TriangleBlock));
     add(blockIds_.data(), blockIds_.size() * sizeof(PrimRef));
     add(mixedPrims_.data(), mixedPrims_.size() * sizeof(PrimRef));
     return h;
@@ -232,7 +235,7 @@ std::string KdTreeAccel::checkInvariants() const {
         for (uint32_t k = 0; k < count; ++k) {
             PrimRef want = prims_[primIndices_[first + k]], got;
             if (n.word1 >> 2 & kMixedFlag) got = mixedPrims_[n.word0 + k];
-            else got = blockIds_[size_t(n.word0) * 4 + k];
+            else got = blockIds_[size_t(n.word0) * kLanes + k];
             if (want.geomId != got.geomId || want.primId != got.primId) return "leaf block differs from the builder's leaf";
         }
     }

@@ -10,12 +10,6 @@
 
 namespace tessera {
 
-float KdNode::split() const {
-    float f;
-    std::memcpy(&f, &word0, 4);
-    return f;
-}
-
 KdNode KdNode::inner(int axis, float split, uint32_t aboveChild) {
     KdNode n;
     std::memcpy(&n.word0, &split, 4);
@@ -191,7 +185,131 @@ public:
         return cost;
     }
 
+    /// A reference of the binned levels: a primitive and its box clipped to the current cell.
+    struct Ref {
+        Bounds3f box;
+        uint32_t prim;
+    };
+
+    /// Builds the subtree of `cell` over `refs` (consumed; sorted by primitive): binned SAH while
+    /// the node holds more than `binnedAbove` references, then the exact event build. Returns the
+    /// subtree's cost as build() does.
+    double buildBinned(std::vector<Ref>& refs, const Bounds3f& cell, int depth, int badRefines) {
+        const uint32_t count = uint32_t(refs.size());
+        SplitCandidate best;
+        if (count > config_.binnedAbove && depth < out_.stats.depthLimit) best = findBinnedSplit(refs, cell);
+        if (best.axis < 0 || best.cost >= config_.intersectionCost * blocks(count)) {
+            // Small enough, at the depth limit, or no binned plane pays: the exact sweep decides
+            // (including whether this becomes a leaf, with the bad-refinement rules).
+            EventList events;
+            eventsOf(refs, events);
+            std::vector<Ref>().swap(refs);
+            return build(events, count, cell, depth, badRefines);
+        }
+        out_.stats.maxDepth = std::max(out_.stats.maxDepth, depth);
+        out_.stats.refsBinned += count;
+        Bounds3f leftCell = cell, rightCell = cell;
+        leftCell.upper[best.axis] = best.pos;
+        rightCell.lower[best.axis] = best.pos;
+        std::vector<Ref> left, right;
+        left.reserve(count / 2 + count / 8), right.reserve(count / 2 + count / 8);
+        const int a = best.axis;
+        // In primitive order, so both lists stay sorted by primitive. A box ending at the plane
+        // (planar ones in it included) goes left, one starting there right: the sweep's rules.
+        for (const Ref& r : refs) {
+            if (r.box.upper[a] <= best.pos) left.push_back(r);
+            else if (r.box.lower[a] >= best.pos) right.push_back(r);
+            else {
+                // Straddling: perfect split, clipped to each child (within its current box).
+                Bounds3f bl = intersect(clipped(r.prim, leftCell), r.box), br = intersect(clipped(r.prim, rightCell), r.box);
+                if (!bl.empty()) left.push_back({bl, r.prim});
+                if (!br.empty()) right.push_back({br, r.prim});
+            }
+        }
+        std::vector<Ref>().swap(refs);
+        uint32_t nodeIndex = uint32_t(out_.nodes.size());
+        out_.nodes.emplace_back();
+        ++out_.stats.innerNodes;
+        double costL = buildBinned(left, leftCell, depth + 1, badRefines);
+        uint32_t above = uint32_t(out_.nodes.size());
+        double costR = buildBinned(right, rightCell, depth + 1, badRefines);
+        out_.nodes[nodeIndex] = KdNode::inner(best.axis, best.pos, above);
+        return config_.traversalCost + (leftCell.surfaceArea() * costL + rightCell.surfaceArea() * costR) / cell.surfaceArea();
+    }
+
 private:
+    static Bounds3f intersect(const Bounds3f& a, const Bounds3f& b) {
+        Bounds3f r;
+        r.lower = glm::max(a.lower, b.lower);
+        r.upper = glm::min(a.upper, b.upper);
+        return r;
+    }
+
+    /// Binned SAH (min–max binning): per axis, count the references whose box starts in each bin
+    /// and those whose box ends in each bin; at the boundary after bin k, N_L = starts in bins ≤ k
+    /// and N_R = ends in bins > k. Bin indices round like the plane positions only approximately,
+    /// so the counts are estimates; the partition itself compares exactly. Same cost model as the
+    /// sweep (empty-space bonus included).
+    SplitCandidate findBinnedSplit(const std::vector<Ref>& refs, const Bounds3f& cell) {
+        SplitCandidate best;
+        const int nb = std::clamp(config_.binCount, 2, 256);
+        const Vec3f d = cell.diagonal();
+        const float area = cell.surfaceArea();
+        if (!(area > 0.f)) return best;
+        const float invArea = 1.f / area;
+        const float kt = config_.traversalCost, ki = config_.intersectionCost, lambdaEmpty = 1.f - config_.emptyBonus;
+        const uint32_t count = uint32_t(refs.size());
+        binStart_.assign(size_t(3 * nb), 0u);
+        binEnd_.assign(size_t(3 * nb), 0u);
+        Vec3f scale;
+        for (int a = 0; a < 3; ++a) scale[a] = d[a] > 0.f ? float(nb) / d[a] : 0.f;
+        auto binOf = [&](float x, int a) { return std::clamp(int((x - cell.lower[a]) * scale[a]), 0, nb - 1); };
+        for (const Ref& r : refs)
+            for (int a = 0; a < 3; ++a) {
+                ++binStart_[size_t(a * nb + binOf(r.box.lower[a], a))];
+                ++binEnd_[size_t(a * nb + binOf(r.box.upper[a], a))];
+            }
+        for (int a = 0; a < 3; ++a) {
+            if (!(d[a] > 0.f)) continue;
+            const int b = (a + 1) % 3, c = (a + 2) % 3;
+            const float crossArea = d[b] * d[c], perimeter = d[b] + d[c];
+            const float lo = cell.lower[a], hi = cell.upper[a];
+            const float minEmpty = config_.emptyCutMinFraction * (hi - lo);
+            uint32_t nl = 0, nr = count;
+            for (int k = 0; k + 1 < nb; ++k) {
+                nl += binStart_[size_t(a * nb + k)];
+                nr -= binEnd_[size_t(a * nb + k)];
+                const float p = lo + d[a] * float(k + 1) / float(nb);
+                if (!(p > lo && p < hi)) continue;
+                float pl = 2.f * ((p - lo) * perimeter + crossArea) * invArea;
+                float pr = 2.f * ((hi - p) * perimeter + crossArea) * invArea;
+                float cost = kt + ki * (pl * blocks(nl) + pr * blocks(nr));
+                if ((nl == 0 && p - lo >= minEmpty) || (nr == 0 && hi - p >= minEmpty)) cost *= lambdaEmpty;
+                if (cost < best.cost) best = {cost, a, p, true};
+            }
+        }
+        return best;
+    }
+
+    /// The sorted events of `refs` (sorted by primitive, so the stable radix sort on the upper key
+    /// bits sorts by the whole key).
+    static void eventsOf(const std::vector<Ref>& refs, EventList& events) {
+        std::vector<Event> list;
+        list.reserve(refs.size() * 6);
+        for (int a = 0; a < 3; ++a)
+            for (const Ref& r : refs) {
+                if (r.box.lower[a] == r.box.upper[a]) {
+                    list.push_back(makeEvent(a, r.box.lower[a], kPlanar, r.prim));
+                } else {
+                    list.push_back(makeEvent(a, r.box.lower[a], kStart, r.prim));
+                    list.push_back(makeEvent(a, r.box.upper[a], kEnd, r.prim));
+                }
+            }
+        radixSortEvents(list);
+        events.allocate(list.size());
+        std::copy(list.begin(), list.end(), events.data.get());
+    }
+
     /// B(n) = max(1, n / sahBlockSize) for n > 0: a leaf test costs one SIMD block at least, and
     /// grows linearly beyond. (⌈n / sahBlockSize⌉ jumps at multiples of the block size, and then a
     /// split that duplicates almost every reference, 9 → 8 + 8, looks cheaper than a leaf.)
@@ -361,6 +479,7 @@ private:
     std::vector<uint8_t> side_;
     std::vector<uint32_t> straddlers_;
     std::vector<Event> keptLeft_, keptRight_, newLeft_, newRight_;
+    std::vector<uint32_t> binStart_, binEnd_;
 };
 
 }  // namespace
@@ -377,27 +496,32 @@ KdTree buildKdTree(std::span<const Bounds3f> primBounds, const KdClipFunction& c
     tree.stats.depthLimit = std::clamp(limit, 0, kKdMaxDepth);
     if (n == 0) return tree;
 
-    std::vector<Event> events;
-    events.reserve(6 * n);
-    // Per axis, in primitive order: the radix sort is stable, so equal keys stay by primitive.
-    for (int a = 0; a < 3; ++a)
-        for (uint32_t i = 0; i < n; ++i) {
-            const Bounds3f& b = primBounds[i];
-            if (b.lower[a] == b.upper[a]) {
-                events.push_back(makeEvent(a, b.lower[a], kPlanar, i));
-            } else {
-                events.push_back(makeEvent(a, b.lower[a], kStart, i));
-                events.push_back(makeEvent(a, b.upper[a], kEnd, i));
-            }
-        }
-    radixSortEvents(events);
-
-    EventList root;
-    root.allocate(events.size());
-    std::copy(events.begin(), events.end(), root.data.get());
-    std::vector<Event>().swap(events);
     KdBuilder builder(primBounds, clip, config, tree);
-    tree.stats.sahCost = builder.build(root, uint32_t(n), tree.bounds, 0, 0);
+    if (config.binnedAbove > 0 && n > config.binnedAbove) {
+        std::vector<KdBuilder::Ref> refs(n);
+        for (uint32_t i = 0; i < n; ++i) refs[i] = {primBounds[i], i};
+        tree.stats.sahCost = builder.buildBinned(refs, tree.bounds, 0, 0);
+    } else {
+        std::vector<Event> events;
+        events.reserve(6 * n);
+        // Per axis, in primitive order: the radix sort is stable, so equal keys stay by primitive.
+        for (int a = 0; a < 3; ++a)
+            for (uint32_t i = 0; i < n; ++i) {
+                const Bounds3f& b = primBounds[i];
+                if (b.lower[a] == b.upper[a]) {
+                    events.push_back(makeEvent(a, b.lower[a], kPlanar, i));
+                } else {
+                    events.push_back(makeEvent(a, b.lower[a], kStart, i));
+                    events.push_back(makeEvent(a, b.upper[a], kEnd, i));
+                }
+            }
+        radixSortEvents(events);
+        EventList root;
+        root.allocate(events.size());
+        std::copy(events.begin(), events.end(), root.data.get());
+        std::vector<Event>().swap(events);
+        tree.stats.sahCost = builder.build(root, uint32_t(n), tree.bounds, 0, 0);
+    }
     tree.nodes.shrink_to_fit();
     tree.primIndices.shrink_to_fit();
     return tree;

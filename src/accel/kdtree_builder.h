@@ -5,10 +5,13 @@
 /// every node sweeps them per axis with left/right/planar counts, and the sorted lists are split
 /// stably to the children; only primitives that straddle the chosen plane are clipped to the child
 /// cells ("perfect splits") and get freshly sorted events, merged into the children's lists.
+/// Nodes above `KdConfig::binnedAbove` references choose their plane by binning instead and sort
+/// their events only once they are small (a hybrid; still O(N log N)).
 ///
 /// Like the BVH builder it sees primitive *boxes* (so triangles and spheres share it); perfect
 /// splits additionally ask the caller to clip one primitive to a cell (`KdClipFunction`).
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <span>
 #include <vector>
@@ -23,19 +26,19 @@ namespace tessera {
 ///   λ(p) = 1 − emptyBonus when N_L = 0 or N_R = 0 and the empty child spans at least
 ///          emptyCutMinFraction of the cell along the split axis, else 1,
 /// where A are surface areas and B(n) = max(1, n / sahBlockSize) (n > 0) the SIMD leaf blocks a leaf
-/// of n primitives costs (ours tests 4 triangles at once, so 1..4 triangles cost one test; linear
-/// beyond, not rounded up: see KdBuilder::blocks). A leaf costs C_isect·B(N).
+/// of n primitives costs (ours tests 8 triangles at once, triangle8.h, so 1..8 triangles cost one
+/// test; linear beyond, not rounded up: see KdBuilder::blocks). A leaf costs C_isect·B(N).
 /// Defaults chosen on the Stanford dragons with the traversal of kdtree_traversal.cpp: across the
-/// settings tried (C_trav 1–3, C_isect 1–10, bonus 0–0.5) rays/s moved less than the run-to-run
-/// noise, while lower C_trav/C_isect ratios doubled memory and build time, so the defaults favour
-/// those (writeup.md §8c).
+/// settings tried (C_trav 1–8, C_isect 1–10, bonus 0–0.5, blocks of 4 or 8) rays/s moved less than
+/// the run-to-run noise, while lower C_trav/C_isect ratios raised memory and build time, so the
+/// defaults favour those (writeup.md §8d).
 struct KdConfig {
     /// Cost of one traversal step (inner node), relative to intersectionCost.
-    float traversalCost = 2.0f;
+    float traversalCost = 3.0f;
     /// Cost of intersecting one leaf block of `sahBlockSize` primitives.
     float intersectionCost = 1.5f;
     /// Primitives one leaf test handles together; 1 gives the classic per-primitive SAH.
-    int sahBlockSize = 4;
+    int sahBlockSize = 8;
     /// Fraction of the cost saved when one child is empty (W&H use λ = 0.8, i.e. 0.2; pbrt 0.5).
     float emptyBonus = 0.2f;
     /// The bonus needs an empty child at least this thick (fraction of the cell along the axis).
@@ -50,6 +53,17 @@ struct KdConfig {
     int maxBadRefines = 1;
     /// Clip straddling primitives to the child cells (W&H "perfect splits"); false keeps their boxes.
     bool perfectSplits = true;
+    /// Nodes with more primitives than this choose their split from `binCount` equal bins per axis
+    /// over their (clipped) primitive boxes instead of sweeping sorted events; at or below it, a
+    /// node sorts its events once and the exact W&H sweep takes over for its subtree. 0 sweeps
+    /// exactly everywhere (the pure W&H build). Binning touches each reference once per level with
+    /// no event lists to rewrite (Shevtsov et al. 2007, "Highly parallel fast KD-tree
+    /// construction", bin k-d trees the same way); the big upper levels hardly need exact planes,
+    /// while the levels near the surface, where rays spend their steps, keep them. Both parts are
+    /// O(n) per level: still O(N log N).
+    uint32_t binnedAbove = 4096;
+    /// Bins per axis for the binned levels (candidate planes at the bins' inner boundaries).
+    int binCount = 64;
 };
 
 /// The hard cap on depth (traversal stacks hold this many entries).
@@ -64,7 +78,12 @@ struct KdNode {
     bool isLeaf() const { return (word1 & 3u) == 3u; }
     int axis() const { return int(word1 & 3u); }
     uint32_t aboveChild() const { return word1 >> 2; }
-    float split() const;
+    /// Inline: the traversal reads it at every inner node (an out-of-line call cost ~3% of it).
+    float split() const {
+        float f;
+        std::memcpy(&f, &word0, 4);
+        return f;
+    }
     static KdNode inner(int axis, float split, uint32_t aboveChild);
     static KdNode leaf(uint32_t first, uint32_t payload);
 };
@@ -76,7 +95,8 @@ using KdClipFunction = std::function<Bounds3f(uint32_t prim, const Bounds3f& cel
 struct KdBuildStats {
     size_t innerNodes = 0, leaves = 0, emptyLeaves = 0, references = 0;
     size_t depthLimitHits = 0, retractions = 0;
-    size_t eventsSwept = 0;  ///< sum over nodes of their event-list lengths: the build's work
+    size_t eventsSwept = 0;  ///< sum over exact (swept) nodes of their event-list lengths
+    size_t refsBinned = 0;   ///< sum over binned nodes of their reference counts
     int maxDepth = 0, depthLimit = 0;
     double sahCost = 0.0;  ///< expected cost of the tree (root-relative SAH, no empty bonus)
 };

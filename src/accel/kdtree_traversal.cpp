@@ -8,7 +8,7 @@
 #include <cstring>
 
 #include "accel/bvh_simd.h"
-#include "accel/triangle4.h"
+#include "accel/triangle8.h"
 #include "accel/kdtree_accel.h"
 #include "geometry/intersect.h"
 
@@ -37,18 +37,12 @@ struct StackEntry {
     float tMin, tMax;
 };
 
-using Candidate = TriangleCandidate;
-
-/// The shared watertight 4-triangle test (accel/triangle4.h) on one of our leaf blocks.
-template <bool kAnyHit>
-TESSERA_INLINE Candidate intersect4(const TriRay& r, const KdTreeAccel::Triangle4& tri, float tMax) {
-    return intersectTriangle4<kAnyHit>(r, tri.p, tMax);
-}
+using Candidate = Triangle8Candidate;
 
 }  // namespace
 
 template <bool kAnyHit>
-bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
+TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
     if (nodes_.empty() || !isTraceableRay(ray)) return false;
     Vec3f invD;
     for (int a = 0; a < 3; ++a) invD[a] = 1.f / ray.d[a];  // ±inf for ±0.0
@@ -66,6 +60,12 @@ bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
         padT[a] = ray.d[a] != 0.f ? eps * std::abs(invD[a]) : 0.f;
         upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
     }
+    // Per-axis values as plain arrays for the inner loop: glm's operator[] with a run-time index
+    // compiles to a switch, i.e. an unpredictable three-way branch on the axis at every node.
+    float orgA[4], invA[4], padA[4];
+    uint32_t downMask[4];
+    for (int a = 0; a < 3; ++a) orgA[a] = ray.o[a], invA[a] = invD[a], padA[a] = padT[a], downMask[a] = upward[a] ? 0u : ~0u;
+    orgA[3] = invA[3] = padA[3] = 0.f, downMask[3] = 0u;
 
     // Clip the ray to the root cell grown by eps: conservative slabs (Ize 2013), NaN-safe operand
     // order (a 0·inf NaN, from an origin on a slab plane of a zero direction component, leaves the
@@ -81,9 +81,9 @@ bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
     }
     if (!(tMin <= tMax)) return false;
 
-    TriRay triRay(ray);
+    TriRay8 triRay(ray);
     float tHit = ray.tMax;  // closest hit so far (closest-hit kernel)
-    const Triangle4* bestBlock = nullptr;
+    const TriangleBlock* bestBlock = nullptr;
     int bestLane = -1;
     uint32_t bestSphere = kInvalidId;
     PrimRef bestMixedTriangle{kInvalidId, kInvalidId};
@@ -101,13 +101,14 @@ bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
             __builtin_prefetch(nodes + node.aboveChild());
             const int a = node.axis();
             const float split = node.split();
-            const float tPlane = (split - ray.o[a]) * invD[a];
+            const float tPlane = (split - orgA[a]) * invA[a];
             // The ray is below the plane before tPlane when moving upward. NaN (origin in the plane,
             // direction parallel to it) fails both tests below: both children are visited.
-            const uint32_t firstChild = upward[a] ? index + 1 : node.aboveChild();
-            const uint32_t secondChild = upward[a] ? node.aboveChild() : index + 1;
-            const bool skipFirst = tMin > tPlane + padT[a];
-            const bool skipSecond = tPlane - padT[a] > tMax;
+            const uint32_t below = index + 1, above = node.aboveChild();
+            const uint32_t swap = (below ^ above) & downMask[a];
+            const uint32_t firstChild = below ^ swap, secondChild = above ^ swap;
+            const bool skipFirst = tMin > tPlane + padA[a];
+            const bool skipSecond = tPlane - padA[a] > tMax;
             // Branch-free step (the three-way choice is a coin toss for incoherent rays): the far
             // entry is always written and kept only when both children are visited.
             const bool both = !skipFirst && !skipSecond;
@@ -120,9 +121,9 @@ bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
         // Leaf.
         const uint32_t count = node.word1 >> 3;
         if (!(node.word1 >> 2 & kMixedFlag)) {
-            const Triangle4* blocks = triangles_.data() + node.word0;
+            const TriangleBlock* blocks = triangles_.data() + node.word0;
             for (uint32_t b = 0; b < count; ++b) {
-                Candidate c = intersect4<kAnyHit>(triRay, blocks[b], tHit);
+                Candidate c = intersectTriangle8<kAnyHit>(triRay, blocks[b].p, tHit);
                 if (c.lane < 0) continue;
                 if constexpr (kAnyHit) return true;
                 tHit = c.t, bestU = c.u, bestV = c.v;
@@ -171,7 +172,7 @@ done:
             Vec3f p[3];
             for (int v = 0; v < 3; ++v) p[v] = {bestBlock->p[v][0][bestLane], bestBlock->p[v][1][bestLane], bestBlock->p[v][2][bestLane]};
             hit->t = tHit, hit->u = bestU, hit->v = bestV;
-            const PrimRef& id = blockIds_[size_t(bestBlock - triangles_.data()) * 4 + size_t(bestLane)];
+            const PrimRef& id = blockIds_[size_t(bestBlock - triangles_.data()) * kLanes + size_t(bestLane)];
             hit->geomId = id.geomId;
             hit->primId = id.primId;
             hit->ng = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
@@ -202,7 +203,17 @@ done:
     }
 }
 
-bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const { return traverse<false>(ray, &hit); }
-bool KdTreeAccel::occluded(const Ray& ray) const { return traverse<true>(ray, nullptr); }
+#if defined(TESSERA_X86)
+__attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return traverse<false>(ray, &hit); }
+__attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return traverse<true>(ray, nullptr); }
+#else
+bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return traverse<false>(ray, &hit); }
+bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return traverse<true>(ray, nullptr); }
+#endif
+
+bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const {
+    return useAvx2_ ? intersectAvx2(ray, hit) : traverse<false>(ray, &hit);
+}
+bool KdTreeAccel::occluded(const Ray& ray) const { return useAvx2_ ? occludedAvx2(ray) : traverse<true>(ray, nullptr); }
 
 }  // namespace tessera

@@ -121,13 +121,13 @@ nlohmann::json kdStatsJson(const Accel& accel) {
     return {{"innerNodes", s.innerNodes}, {"leaves", s.leaves}, {"emptyLeaves", s.emptyLeaves},
             {"referencesPerPrimitive", accel.stats().primitives ? double(s.references) / double(accel.stats().primitives) : 0.0},
             {"maxDepth", s.maxDepth}, {"depthLimit", s.depthLimit}, {"depthLimitHits", s.depthLimitHits},
-            {"retractions", s.retractions}, {"eventsSwept", s.eventsSwept}, {"sahCost", s.sahCost}};
+            {"retractions", s.retractions}, {"eventsSwept", s.eventsSwept}, {"refsBinned", s.refsBinned}, {"sahCost", s.sahCost}};
 }
 
 nlohmann::json kdConfigJson(const KdConfig& c) {
     return {{"traversalCost", c.traversalCost}, {"intersectionCost", c.intersectionCost}, {"sahBlockSize", c.sahBlockSize},
             {"emptyBonus", c.emptyBonus}, {"emptyCutMinFraction", c.emptyCutMinFraction}, {"maxDepth", c.maxDepth}, {"maxBadRefines", c.maxBadRefines},
-            {"perfectSplits", c.perfectSplits}};
+            {"perfectSplits", c.perfectSplits}, {"binnedAbove", c.binnedAbove}, {"binCount", c.binCount}};
 }
 
 /// `--complexity`: build times only, normalised by N·log2 N (Wald & Havran 2006 claim O(N log N) for
