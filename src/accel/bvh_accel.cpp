@@ -91,17 +91,7 @@ TESSERA_INLINE bool occludedTriangle4(const TriRay& r, const BvhAccel::Triangle4
     return tessera::intersectTriangle4<true>(r, tri.p, tMax).lane >= 0;
 }
 
-Bounds3f paddedSphereBounds(const Sphere& s) {
-    // The same relative padding as the Embree backend: float rounding of centre ± radius must never
-    // cut off part of the sphere.
-    float pad = 1e-6f * (s.radius + maxComponent(glm::abs(s.center)));
-    Bounds3f b = sphereBounds(s);
-    b.lower -= Vec3f(pad);
-    b.upper += Vec3f(pad);
-    return b;
-}
 
-bool finiteBounds(const Bounds3f& b) { return isFinite(b.lower) && isFinite(b.upper) && !b.empty(); }
 
 void setEmptyChild(BvhAccel::Node8& n, int lane) {
     for (int a = 0; a < 3; ++a) {

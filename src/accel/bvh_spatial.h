@@ -10,6 +10,7 @@
 #include <span>
 
 #include "accel/bvh_builder.h"
+#include "geometry/clip.h"
 
 namespace tessera {
 
@@ -28,9 +29,5 @@ using ClipToBox = std::function<Bounds3f(uint32_t prim, const Bounds3f& box)>;
 BinaryBvh buildSpatialSplitBvh(std::span<const Bounds3f> primBounds, std::span<const Vec3f> triangles,
                                const ClipToBox& clip, const BvhConfig& config);
 
-/// Bounds of triangle (p0, p1, p2) clipped to `box` (Sutherland–Hodgman in double precision), rounded
-/// outward to float; empty when the triangle does not reach the box. Shared with the k-d tree's
-/// perfect splits (defined in kdtree_accel.cpp).
-Bounds3f clipTriangleBounds(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Bounds3f& box);
 
 }  // namespace tessera

@@ -25,15 +25,13 @@ const SceneGeometry* geometryOf(void* userPtr) { return static_cast<const SceneG
 
 void sphereBoundsFn(const RTCBoundsFunctionArguments* args) {
     const Sphere& s = geometryOf(args->geometryUserPtr)->spheres[args->primID];
-    // Pad by a relative 1e-6 so float rounding of centre ± radius never cuts the sphere.
-    float pad = 1e-6f * (s.radius + maxComponent(glm::abs(s.center)));
-    Bounds3f b = sphereBounds(s);
-    args->bounds_o->lower_x = b.lower.x - pad;
-    args->bounds_o->lower_y = b.lower.y - pad;
-    args->bounds_o->lower_z = b.lower.z - pad;
-    args->bounds_o->upper_x = b.upper.x + pad;
-    args->bounds_o->upper_y = b.upper.y + pad;
-    args->bounds_o->upper_z = b.upper.z + pad;
+    Bounds3f b = paddedSphereBounds(s);  // the same box as our structures
+    args->bounds_o->lower_x = b.lower.x;
+    args->bounds_o->lower_y = b.lower.y;
+    args->bounds_o->lower_z = b.lower.z;
+    args->bounds_o->upper_x = b.upper.x;
+    args->bounds_o->upper_y = b.upper.y;
+    args->bounds_o->upper_z = b.upper.z;
 }
 
 Ray rayFromEmbree(RTCRayN* ray, unsigned N, unsigned i) {

@@ -9,6 +9,7 @@
 
 #include "accel/accel.h"
 #include "accel/kdtree_builder.h"
+#include "geometry/clip.h"
 
 namespace tessera {
 
@@ -79,8 +80,5 @@ private:
     KdBuildStats buildStats_;
 };
 
-/// Bounds of triangle (p0, p1, p2) clipped to `box` (Sutherland–Hodgman in double precision),
-/// rounded outward to float; empty when the triangle does not reach the box.
-Bounds3f clipTriangleBounds(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Bounds3f& box);
 
 }  // namespace tessera

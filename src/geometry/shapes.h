@@ -46,4 +46,17 @@ inline Bounds3f sphereBounds(const Sphere& s) {
     return b;
 }
 
+/// The box our structures and the Embree backend give a sphere: float rounding of centre ± radius
+/// must never cut off part of it, so it is padded relative to the sphere's magnitude.
+inline Bounds3f paddedSphereBounds(const Sphere& s) {
+    float pad = 1e-6f * (s.radius + maxComponent(glm::abs(s.center)));
+    Bounds3f b = sphereBounds(s);
+    b.lower -= Vec3f(pad);
+    b.upper += Vec3f(pad);
+    return b;
+}
+
+/// Finite and not empty: a primitive with such a box can be hit.
+inline bool finiteBounds(const Bounds3f& b) { return isFinite(b.lower) && isFinite(b.upper) && !b.empty(); }
+
 }  // namespace tessera
