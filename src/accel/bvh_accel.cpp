@@ -11,7 +11,7 @@
 
 #include "accel/bvh_simd.h"
 #include "accel/bvh_spatial.h"
-#include "accel/triangle4.h"
+#include "accel/triangle_simd.h"
 #include "geometry/intersect.h"
 
 namespace tessera {
@@ -85,10 +85,10 @@ struct BoxRay {
 };
 
 TESSERA_INLINE TriangleCandidate intersectTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
-    return tessera::intersectTriangle4<false>(r, tri.p, tMax);
+    return intersectTriangles<4, false>(r, tri.p, tMax);
 }
 TESSERA_INLINE bool occludedTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
-    return tessera::intersectTriangle4<true>(r, tri.p, tMax).lane >= 0;
+    return intersectTriangles<4, true>(r, tri.p, tMax).lane >= 0;
 }
 
 

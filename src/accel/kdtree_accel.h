@@ -3,7 +3,7 @@
 /// Tessera's SAH k-d tree (`--accel kdtree`): built in O(N log N) with perfect splits
 /// (kdtree_builder.h, Wald & Havran 2006), 8-byte nodes, front-to-back stack traversal with early
 /// exit and separate closest-hit / any-hit kernels (kdtree_traversal.cpp), leaves of 8-wide SIMD
-/// watertight triangle blocks (triangle8.h). Triangles and spheres; hit records in Embree's convention (accel.h).
+/// watertight triangle blocks (triangle_simd.h). Triangles and spheres; hit records in Embree's convention (accel.h).
 #include <string>
 #include <vector>
 

@@ -26,7 +26,7 @@ namespace tessera {
 ///   λ(p) = 1 − emptyBonus when N_L = 0 or N_R = 0 and the empty child spans at least
 ///          emptyCutMinFraction of the cell along the split axis, else 1,
 /// where A are surface areas and B(n) = max(1, n / sahBlockSize) (n > 0) the SIMD leaf blocks a leaf
-/// of n primitives costs (ours tests 8 triangles at once, triangle8.h, so 1..8 triangles cost one
+/// of n primitives costs (ours tests 8 triangles at once, triangle_simd.h, so 1..8 triangles cost one
 /// test; linear beyond, not rounded up: see KdBuilder::blocks). A leaf costs C_isect·B(N).
 /// Defaults chosen on the Stanford dragons with the traversal of kdtree_traversal.cpp: across the
 /// settings tried (C_trav 1–8, C_isect 1–10, bonus 0–0.5, blocks of 4 or 8) rays/s moved less than

@@ -8,7 +8,7 @@
 #include <cstring>
 
 #include "accel/bvh_simd.h"
-#include "accel/triangle8.h"
+#include "accel/triangle_simd.h"
 #include "accel/kdtree_accel.h"
 #include "geometry/intersect.h"
 
@@ -37,7 +37,7 @@ struct StackEntry {
     float tMin, tMax;
 };
 
-using Candidate = Triangle8Candidate;
+using Candidate = TriangleCandidate;
 
 }  // namespace
 
@@ -123,7 +123,7 @@ TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
         if (!(node.word1 >> 2 & kMixedFlag)) {
             const TriangleBlock* blocks = triangles_.data() + node.word0;
             for (uint32_t b = 0; b < count; ++b) {
-                Candidate c = intersectTriangle8<kAnyHit>(triRay, blocks[b].p, tHit);
+                Candidate c = intersectTriangles<8, kAnyHit>(triRay, blocks[b].p, tHit);
                 if (c.lane < 0) continue;
                 if constexpr (kAnyHit) return true;
                 tHit = c.t, bestU = c.u, bestV = c.v;
