@@ -11,6 +11,7 @@
 
 #include "accel/bvh_simd.h"
 #include "accel/bvh_spatial.h"
+#include "accel/mixed_leaf.h"
 #include "accel/triangle_simd.h"
 #include "geometry/intersect.h"
 
@@ -305,8 +306,7 @@ TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
     float tMax = ray.tMax;
     const Triangle4* bestBlock = nullptr;
     int bestLane = -1;
-    uint32_t bestSphere = kInvalidId;
-    PrimRef bestMixedTriangle{kInvalidId, kInvalidId};
+    MixedCandidate bestMixed;
     float bestU = 0.f, bestV = 0.f;
 
     StackEntry stack[kStackSize];
@@ -346,30 +346,11 @@ TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                 TriangleCandidate c = intersectTriangle4(triRay, tri, tMax);
                 if (c.lane < 0) continue;
                 tMax = c.t, bestU = c.u, bestV = c.v;
-                bestBlock = &tri, bestLane = c.lane, bestSphere = kInvalidId, bestMixedTriangle.geomId = kInvalidId;
+                bestBlock = &tri, bestLane = c.lane;
             }
         } else {
             uint32_t first = (ref & ~(kLeafBit | kMixedBit)) >> 4, count = ref & 15u;
-            Ray clipped = ray;
-            for (uint32_t k = 0; k < count; ++k) {
-                clipped.tMax = tMax;
-                PrimRef p = mixedPrims_[first + k];
-                if (p.geomId == geometry_.sphereGeomId()) {
-                    const Sphere& s = geometry_.spheres[p.primId];
-                    double t = intersectSphere(s.center, s.radius, clipped);
-                    if (t < 0.0 || !(float(t) < tMax)) continue;
-                    tMax = float(t);
-                    bestSphere = p.primId, bestBlock = nullptr, bestMixedTriangle.geomId = kInvalidId;
-                } else {
-                    const TriangleMesh& mesh = geometry_.meshes[p.geomId];
-                    const glm::uvec3& tri = mesh.triangles[p.primId];
-                    TriangleHit th;
-                    if (!intersectTriangle(clipped, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z], th))
-                        continue;
-                    tMax = th.t, bestU = th.u, bestV = th.v;
-                    bestMixedTriangle = p, bestSphere = kInvalidId, bestBlock = nullptr;
-                }
-            }
+            if (intersectMixedLeaf<false>(geometry_, ray, &mixedPrims_[first], count, tMax, bestMixed)) bestBlock = nullptr;
         }
         // Pop the next subtree the ray may still reach before the current closest hit.
         do {
@@ -388,25 +369,8 @@ done:
         hit.ng = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
         return true;
     }
-    if (bestMixedTriangle.geomId != kInvalidId) {
-        const TriangleMesh& mesh = geometry_.meshes[bestMixedTriangle.geomId];
-        const glm::uvec3& tri = mesh.triangles[bestMixedTriangle.primId];
-        const Vec3f &p0 = mesh.positions[tri.x], &p1 = mesh.positions[tri.y], &p2 = mesh.positions[tri.z];
-        hit.t = tMax, hit.u = bestU, hit.v = bestV;
-        hit.geomId = bestMixedTriangle.geomId;
-        hit.primId = bestMixedTriangle.primId;
-        hit.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
-        return true;
-    }
-    if (bestSphere != kInvalidId) {
-        const Sphere& s = geometry_.spheres[bestSphere];
-        // Same expressions as the Embree sphere callback and the brute-force backend.
-        Vec3f n = glm::normalize(Vec3f(Vec3d(ray.o) + double(tMax) * Vec3d(ray.d) - Vec3d(s.center)));
-        Vec2f uv = sphereUv(n);
-        hit.t = tMax, hit.u = uv.x, hit.v = uv.y;
-        hit.geomId = geometry_.sphereGeomId();
-        hit.primId = bestSphere;
-        hit.ng = n;
+    if (bestMixed.geomId != kInvalidId) {
+        mixedHitRecord(geometry_, ray, bestMixed, tMax, hit);
         return true;
     }
     return false;
@@ -447,19 +411,9 @@ TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
                 if (occludedTriangle4(triRay, triangles_[first + b], tMax)) return true;
         } else {
             uint32_t first = (ref & ~(kLeafBit | kMixedBit)) >> 4, count = ref & 15u;
-            for (uint32_t k = 0; k < count; ++k) {
-                PrimRef p = mixedPrims_[first + k];
-                if (p.geomId == geometry_.sphereGeomId()) {
-                    const Sphere& s = geometry_.spheres[p.primId];
-                    if (intersectSphere(s.center, s.radius, ray) >= 0.0) return true;
-                } else {
-                    const TriangleMesh& mesh = geometry_.meshes[p.geomId];
-                    const glm::uvec3& tri = mesh.triangles[p.primId];
-                    TriangleHit th;
-                    if (intersectTriangle(ray, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z], th))
-                        return true;
-                }
-            }
+            MixedCandidate unused;
+            float tHit = ray.tMax;
+            if (intersectMixedLeaf<true>(geometry_, ray, &mixedPrims_[first], count, tHit, unused)) return true;
         }
         if (sp == 0) return false;
         ref = stack[--sp];

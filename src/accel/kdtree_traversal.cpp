@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "accel/bvh_simd.h"
+#include "accel/mixed_leaf.h"
 #include "accel/triangle_simd.h"
 #include "accel/kdtree_accel.h"
 #include "geometry/intersect.h"
@@ -85,8 +86,7 @@ TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
     float tHit = ray.tMax;  // closest hit so far (closest-hit kernel)
     const TriangleBlock* bestBlock = nullptr;
     int bestLane = -1;
-    uint32_t bestSphere = kInvalidId;
-    PrimRef bestMixedTriangle{kInvalidId, kInvalidId};
+    MixedCandidate bestMixed;
     float bestU = 0.f, bestV = 0.f;
 
     StackEntry stack[kKdMaxDepth + 4];
@@ -127,31 +127,11 @@ TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
                 if (c.lane < 0) continue;
                 if constexpr (kAnyHit) return true;
                 tHit = c.t, bestU = c.u, bestV = c.v;
-                bestBlock = &blocks[b], bestLane = c.lane, bestSphere = kInvalidId, bestMixedTriangle.geomId = kInvalidId;
+                bestBlock = &blocks[b], bestLane = c.lane;
             }
-        } else {
-            Ray clipped = ray;
-            for (uint32_t k = 0; k < count; ++k) {
-                clipped.tMax = tHit;
-                PrimRef p = mixedPrims_[node.word0 + k];
-                if (p.geomId == geometry_.sphereGeomId()) {
-                    const Sphere& s = geometry_.spheres[p.primId];
-                    double t = intersectSphere(s.center, s.radius, clipped);
-                    if (t < 0.0 || !(float(t) < tHit)) continue;
-                    if constexpr (kAnyHit) return true;
-                    tHit = float(t);
-                    bestSphere = p.primId, bestBlock = nullptr, bestMixedTriangle.geomId = kInvalidId;
-                } else {
-                    const TriangleMesh& mesh = geometry_.meshes[p.geomId];
-                    const glm::uvec3& tri = mesh.triangles[p.primId];
-                    TriangleHit th;
-                    if (!intersectTriangle(clipped, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z], th))
-                        continue;
-                    if constexpr (kAnyHit) return true;
-                    tHit = th.t, bestU = th.u, bestV = th.v;
-                    bestMixedTriangle = p, bestSphere = kInvalidId, bestBlock = nullptr;
-                }
-            }
+        } else if (intersectMixedLeaf<kAnyHit>(geometry_, ray, &mixedPrims_[node.word0], count, tHit, bestMixed)) {
+            if constexpr (kAnyHit) return true;
+            bestBlock = nullptr;
         }
         // Early exit: a hit inside this leaf's segment is closer than anything behind it.
         if (tHit <= tMax && tHit < ray.tMax) break;
@@ -178,25 +158,8 @@ done:
             hit->ng = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
             return true;
         }
-        if (bestMixedTriangle.geomId != kInvalidId) {
-            const TriangleMesh& mesh = geometry_.meshes[bestMixedTriangle.geomId];
-            const glm::uvec3& tri = mesh.triangles[bestMixedTriangle.primId];
-            const Vec3f &p0 = mesh.positions[tri.x], &p1 = mesh.positions[tri.y], &p2 = mesh.positions[tri.z];
-            hit->t = tHit, hit->u = bestU, hit->v = bestV;
-            hit->geomId = bestMixedTriangle.geomId;
-            hit->primId = bestMixedTriangle.primId;
-            hit->ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
-            return true;
-        }
-        if (bestSphere != kInvalidId) {
-            const Sphere& s = geometry_.spheres[bestSphere];
-            // Same expressions as the Embree sphere callback, the BVH and the brute-force backend.
-            Vec3f n = glm::normalize(Vec3f(Vec3d(ray.o) + double(tHit) * Vec3d(ray.d) - Vec3d(s.center)));
-            Vec2f uv = sphereUv(n);
-            hit->t = tHit, hit->u = uv.x, hit->v = uv.y;
-            hit->geomId = geometry_.sphereGeomId();
-            hit->primId = bestSphere;
-            hit->ng = n;
+        if (bestMixed.geomId != kInvalidId) {
+            mixedHitRecord(geometry_, ray, bestMixed, tHit, *hit);
             return true;
         }
         return false;

@@ -1,0 +1,71 @@
+#pragma once
+/// \file mixed_leaf.h
+/// Leaves that hold spheres (and the triangles sharing a leaf with them) are tested one primitive
+/// at a time with the scalar reference tests of geometry/intersect.h, the same ones the brute-force
+/// and Embree backends use, so their hit records match exactly. Shared by the BVH and the k-d tree.
+#include <cstdint>
+
+#include "accel/accel.h"
+#include "geometry/intersect.h"
+
+namespace tessera {
+
+/// The closest hit so far among mixed-leaf primitives (geomId kInvalidId: none).
+struct MixedCandidate {
+    uint32_t geomId = kInvalidId, primId = kInvalidId;
+    float u = 0.f, v = 0.f;  ///< triangles only: barycentrics
+};
+
+/// Tests `count` primitives (anything with geomId/primId members) against (ray.tMin, tHit). On a
+/// closer hit updates tHit and `best` and returns true; with kAnyHit returns true at the first hit.
+template <bool kAnyHit, class Ref>
+inline bool intersectMixedLeaf(const SceneGeometry& g, const Ray& ray, const Ref* prims, uint32_t count,
+                                       float& tHit, MixedCandidate& best) {
+    bool found = false;
+    Ray clipped = ray;
+    for (uint32_t k = 0; k < count; ++k) {
+        clipped.tMax = tHit;
+        const Ref& p = prims[k];
+        if (p.geomId == g.sphereGeomId()) {
+            const Sphere& s = g.spheres[p.primId];
+            double t = intersectSphere(s.center, s.radius, clipped);
+            if (t < 0.0 || !(float(t) < tHit)) continue;
+            if constexpr (kAnyHit) return true;
+            tHit = float(t);
+            best = {p.geomId, p.primId, 0.f, 0.f};
+        } else {
+            const TriangleMesh& mesh = g.meshes[p.geomId];
+            const glm::uvec3& tri = mesh.triangles[p.primId];
+            TriangleHit th;
+            if (!intersectTriangle(clipped, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z], th)) continue;
+            if constexpr (kAnyHit) return true;
+            tHit = th.t;
+            best = {p.geomId, p.primId, th.u, th.v};
+        }
+        found = true;
+    }
+    return found;
+}
+
+/// The hit record of a mixed-leaf candidate hit at distance t.
+inline void mixedHitRecord(const SceneGeometry& g, const Ray& ray, const MixedCandidate& c, float t, Hit& hit) {
+    hit.t = t;
+    hit.geomId = c.geomId;
+    hit.primId = c.primId;
+    if (c.geomId == g.sphereGeomId()) {
+        const Sphere& s = g.spheres[c.primId];
+        // Same expressions as the Embree sphere callback and the brute-force backend.
+        Vec3f n = glm::normalize(Vec3f(Vec3d(ray.o) + double(t) * Vec3d(ray.d) - Vec3d(s.center)));
+        Vec2f uv = sphereUv(n);
+        hit.u = uv.x, hit.v = uv.y;
+        hit.ng = n;
+        return;
+    }
+    const TriangleMesh& mesh = g.meshes[c.geomId];
+    const glm::uvec3& tri = mesh.triangles[c.primId];
+    const Vec3f &p0 = mesh.positions[tri.x], &p1 = mesh.positions[tri.y], &p2 = mesh.positions[tri.z];
+    hit.u = c.u, hit.v = c.v;
+    hit.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+}
+
+}  // namespace tessera
