@@ -1,13 +1,17 @@
 #include "core/thread_pool.h"
 
+#if defined(__linux__)
 #include <sched.h>
+#endif
 
 namespace tessera {
 
 int hardwareThreads() {
+#if defined(__linux__)
     cpu_set_t set;
     CPU_ZERO(&set);
     if (sched_getaffinity(0, sizeof(set), &set) == 0 && CPU_COUNT(&set) > 0) return CPU_COUNT(&set);
+#endif
     unsigned n = std::thread::hardware_concurrency();
     return n > 0 ? int(n) : 1;
 }
@@ -15,16 +19,26 @@ int hardwareThreads() {
 ThreadPool::ThreadPool(int threads) {
     int n = threads > 0 ? threads : hardwareThreads();
     workers_.reserve(size_t(n - 1));
-    for (int i = 1; i < n; ++i) workers_.emplace_back([this] { workerLoop(); });
+    try {
+        for (int i = 1; i < n; ++i) workers_.emplace_back([this] { workerLoop(); });
+    } catch (...) {
+        // Out of threads (std::system_error): join the ones started, or their std::thread
+        // destructors would terminate the process, and report the failure to the caller.
+        stopAndJoin();
+        throw;
+    }
 }
 
-ThreadPool::~ThreadPool() {
+ThreadPool::~ThreadPool() { stopAndJoin(); }
+
+void ThreadPool::stopAndJoin() {
     {
         std::lock_guard<std::mutex> lock(mutex_);
         stop_ = true;
     }
     wake_.notify_all();
     for (std::thread& t : workers_) t.join();
+    workers_.clear();
 }
 
 void ThreadPool::drain(Job& job) {

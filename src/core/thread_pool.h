@@ -50,6 +50,7 @@ private:
     };
     static void drain(Job& job);
     void workerLoop();
+    void stopAndJoin();
 
     std::vector<std::thread> workers_;
     std::mutex mutex_;
