@@ -7,6 +7,7 @@
 
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -20,6 +21,70 @@
 using namespace tessera;
 
 namespace {
+
+/// The value of `name=` in a trace line (the first component of a triple), or NaN when absent.
+double traceField(const std::string& line, const std::string& name) {
+    size_t at = line.find(" " + name + "=");
+    if (at == std::string::npos) return std::nan("");
+    size_t v = at + name.size() + 2;
+    if (line[v] == '(') ++v;
+    return std::strtod(line.c_str() + v, nullptr);
+}
+
+/// Counts of what a --debug-pixel trace holds, with every density and MIS weight checked.
+struct TraceSummary {
+    int vertexLines = 0, strategyLines = 0, bsdfPdfs = 0, lightPdfs = 0, subpathPdfs = 0;
+};
+
+TraceSummary checkTrace(const std::string& trace) {
+    TraceSummary sum;
+    std::istringstream in(trace);
+    std::string line;
+    while (std::getline(in, line)) {
+        bool vertex = line.rfind("  vertex ", 0) == 0;
+        bool subpath = line.rfind("  camera vertex ", 0) == 0 || line.rfind("  light vertex ", 0) == 0;
+        bool strategy = line.rfind("  strategy s=", 0) == 0;
+        if (vertex) {
+            ++sum.vertexLines;
+            // Every vertex line names where it is and the throughput that reached it.
+            EXPECT_TRUE(std::isfinite(traceField(line, "p"))) << line;
+            EXPECT_GT(traceField(line, "beta"), 0.0) << line;
+        }
+        if (subpath) {
+            // Sub-path vertices carry their forward area density (> 0: every vertex was sampled).
+            double pdfFwdA = traceField(line, "pdfFwdA");
+            EXPECT_TRUE(std::isfinite(pdfFwdA) && pdfFwdA > 0.0) << line;
+            ++sum.subpathPdfs;
+        }
+        if (strategy) {
+            ++sum.strategyLines;
+            double w = traceField(line, "misW");
+            if (!std::isnan(w)) {
+                EXPECT_TRUE(w >= 0.0 && w <= 1.0) << line;
+            }
+        }
+        // A diffuse scene: every BSDF and light density the integrators print is finite and > 0.
+        // (The BSDF density of a light sample behind the surface is 0: it is only checked finite.)
+        double lightBsdfPdfW = traceField(line, "lightBsdfPdfW");
+        if (!std::isnan(lightBsdfPdfW)) {
+            EXPECT_TRUE(std::isfinite(lightBsdfPdfW) && lightBsdfPdfW >= 0.0) << line;
+        }
+        for (const char* name : {"bsdfPdfW", "lightPdfW", "emissionPdfLightW"}) {
+            double v = traceField(line, name);
+            if (std::isnan(v)) continue;
+            EXPECT_TRUE(std::isfinite(v) && v > 0.0) << name << " in " << line;
+            if (std::string(name) == "bsdfPdfW") ++sum.bsdfPdfs;
+            if (std::string(name) == "lightPdfW") ++sum.lightPdfs;
+        }
+        for (const char* name : {"lightMisW", "emissionMisW"}) {
+            double w = traceField(line, name);
+            if (!std::isnan(w)) {
+                EXPECT_TRUE(w > 0.0 && w <= 1.0) << name << " in " << line;
+            }
+        }
+    }
+    return sum;
+}
 
 /// Returns 0.25 everywhere except NaN at chosen (pixel, sample index) pairs, and splats +Inf from
 /// one more; everything else a plain constant, so the expected film is known exactly.
@@ -109,6 +174,7 @@ TEST(DebugPixel, ReplayEqualsTheOneSampleRenderBitForBit) {
         ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
         io::Image image = io::readImage(exr.string());
         int nonZero = 0;
+        TraceSummary total;
         for (auto [x, y] : {std::pair{20, 15}, {3, 27}, {33, 4}, {11, 9}, {39, 29}, {0, 0}}) {
             std::string cmd = base + "--integrator " + integrator + " --json --debug-pixel " + std::to_string(x) + "," +
                               std::to_string(y) + ",0 2> '" + (dir / "trace.txt").string() + "'";
@@ -121,6 +187,17 @@ TEST(DebugPixel, ReplayEqualsTheOneSampleRenderBitForBit) {
             nlohmann::json j = nlohmann::json::parse(out);
             EXPECT_TRUE(j["finite"].get<bool>());
             EXPECT_GT(j["rays"].get<int>(), 0);
+            std::ifstream in(dir / "trace.txt");
+            std::string trace((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+            TraceSummary t = checkTrace(trace);
+            // A camera ray that hits the box makes at least one vertex; one record per vertex.
+            if (trace.find("ray 1: o=") != std::string::npos && trace.find("-> hit") != std::string::npos) {
+                EXPECT_GE(t.vertexLines, 1) << trace;
+            }
+            EXPECT_EQ(size_t(t.vertexLines), j["trace_records"].get<size_t>()) << trace;
+            total.vertexLines += t.vertexLines;
+            total.bsdfPdfs += t.bsdfPdfs;
+            total.lightPdfs += t.lightPdfs;
             for (int c = 0; c < 3; ++c) {
                 float replay = j["radiance"][c].get<float>();
                 float rendered = image.rgba[4 * (size_t(y) * 40 + x) + c];
@@ -132,11 +209,37 @@ TEST(DebugPixel, ReplayEqualsTheOneSampleRenderBitForBit) {
         // Next-event estimation lights almost every pixel at 1 spp; pure path tracing rarely does.
         if (std::string(integrator) == "ptnee") {
             EXPECT_GT(nonZero, 6) << "most of these pixels see lit surfaces";
+            EXPECT_GT(total.lightPdfs, 6) << "ptnee samples a light at (almost) every vertex";
+        }
+        EXPECT_GE(total.vertexLines, 3) << integrator << ": three of the six pixels see the box";
+        EXPECT_GE(total.bsdfPdfs, 6) << integrator << ": a BSDF sample at (almost) every vertex";
+    }
+    // Light tracing and BDPT: sub-path vertices with their area densities, and per (s,t) strategy
+    // the contribution (and for BDPT the MIS weight).
+    for (const char* integrator : {"lt", "bdpt"}) {
+        std::string cmd = base + "--integrator " + integrator + " --json --debug-pixel 20,15,0 2> '" + (dir / "trace.txt").string() + "'";
+        FILE* p = popen(cmd.c_str(), "r");
+        ASSERT_NE(p, nullptr);
+        std::string out;
+        char buf[4096];
+        while (size_t n = std::fread(buf, 1, sizeof buf, p)) out.append(buf, n);
+        ASSERT_EQ(pclose(p), 0) << cmd;
+        nlohmann::json j = nlohmann::json::parse(out);
+        EXPECT_TRUE(j["finite"].get<bool>());
+        std::ifstream in(dir / "trace.txt");
+        std::string trace((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        TraceSummary t = checkTrace(trace);
+        EXPECT_GE(t.subpathPdfs, 1) << trace;
+        EXPECT_GE(t.strategyLines, 1) << trace;
+        EXPECT_EQ(size_t(t.subpathPdfs + t.strategyLines), j["trace_records"].get<size_t>()) << trace;
+        if (std::string(integrator) == "bdpt") {
+            EXPECT_NE(trace.find("  camera vertex 1 "), std::string::npos) << trace;
+            EXPECT_NE(trace.find(" misW="), std::string::npos) << trace;
         }
     }
     std::ifstream in(dir / "trace.txt");
     std::string trace((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    EXPECT_NE(trace.find("replaying pixel (0,0) sample 0 seed 5"), std::string::npos) << trace;
+    EXPECT_NE(trace.find("replaying pixel (20,15) sample 0 seed 5 with bdpt"), std::string::npos) << trace;
     EXPECT_NE(trace.find("ray 1: o="), std::string::npos) << trace;
     // Out of the image: a clear error, exit 2.
     int bad = std::system((base + "--debug-pixel 40,0,0 2>/dev/null >/dev/null").c_str());

@@ -232,7 +232,7 @@ int runRender(const RenderArgs& a) {
             // Non-finite floats become null in JSON: "finite" says which.
             std::cout << nlohmann::json{{"pixel", {id.x, id.y}}, {"sample", id.sample}, {"seed", s.seed},
                                         {"radiance", {r.radiance.r, r.radiance.g, r.radiance.b}}, {"finite", r.finite},
-                                        {"rays", r.rays}, {"splats", splats}}.dump()
+                                        {"rays", r.rays}, {"trace_records", r.vertices}, {"splats", splats}}.dump()
                       << std::endl;
         } else {
             std::printf("%s: radiance %.9g %.9g %.9g%s\n", describe(id).c_str(), double(r.radiance.r), double(r.radiance.g),

@@ -1,6 +1,7 @@
 #include "integrators/bdpt.h"
 
 #include "integrators/bdpt_connect.h"
+#include "integrators/sample_trace.h"
 
 namespace tessera {
 
@@ -17,6 +18,10 @@ Rgb BdptIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
     const int maxDepth = ctx.maxDepth;
     traceCameraSubpath(ctx, raster, sampler, maxDepth < 0 ? -1 : maxDepth + 2, camera);
     traceLightSubpath(ctx, sampler, maxDepth < 0 ? -1 : maxDepth + 1, light);
+    if (ctx.trace) [[unlikely]] {
+        traceSubpath(*ctx.trace, "camera vertex", camera);
+        traceSubpath(*ctx.trace, "light vertex", light);
+    }
     Rgb L(0.f);
     const int nCamera = int(camera.size()), nLight = int(light.size());
     for (int t = 1; t <= nCamera; ++t) {
@@ -24,6 +29,14 @@ Rgb BdptIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
             if (s + t < 2) continue;
             if (maxDepth >= 0 && s + t - 2 > maxDepth) continue;
             ConnectionResult r = connectBdpt(ctx, light, camera, s, t, sampler, settings_.heuristic);
+            if (ctx.trace) [[unlikely]] {
+                // Unweighted C*_{s,t}, its MIS weight and what reaches the image (t = 1: a splat).
+                ctx.trace->begin("strategy", s, t);
+                ctx.trace->add("unweighted", r.L);
+                ctx.trace->add("misW", r.weight);
+                ctx.trace->add("contribution", r.L * r.weight);
+                if (t == 1) ctx.trace->add("raster", Vec3f(r.raster.x, r.raster.y, 0.f));
+            }
             if (isBlack(r.L)) continue;
             if ((settings_.onlyS >= 0 && s != settings_.onlyS) || (settings_.onlyT >= 0 && t != settings_.onlyT)) continue;
             Rgb c = settings_.unweighted ? r.L : r.L * r.weight;

@@ -1,5 +1,6 @@
 #include "integrators/bsdf_path_tracer.h"
 
+#include "integrators/sample_trace.h"
 #include "materials/surface_bsdf.h"
 
 namespace tessera {
@@ -19,6 +20,16 @@ Rgb BsdfPathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
         SurfaceInteraction si = scene.interaction(ray, hit);
         Vec3f wo = -glm::normalize(ray.d);
         if (si.lightIndex != kInvalidId) L += beta * scene.lights().emitted(si.lightIndex, si.ng, wo);
+        SampleTrace* trace = ctx.trace;
+        if (trace) [[unlikely]] {
+            trace->begin("vertex", depth);
+            trace->add("p", si.p);
+            trace->add("ng", si.ng);
+            trace->add("material", float(si.materialId));
+            trace->add("beta", beta);
+            if (si.lightIndex != kInvalidId) trace->add("emissionContribution", beta * scene.lights().emitted(si.lightIndex, si.ng, wo));
+            trace->add("L", L);
+        }
         if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;
 
         SurfaceBsdf bsdf(scene.materials[si.materialId], si.ns, si.ng);
@@ -26,10 +37,17 @@ Rgb BsdfPathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
         float uLobe = sampler.get1D();
         Vec2f uDir = sampler.get2D();
         if (!bsdf.sample(wo, uLobe, uDir, TransportMode::Radiance, bs)) break;
+        if (trace) [[unlikely]] {
+            trace->add("bsdfWi", bs.wiWorld);
+            trace->add("bsdfPdfW", bs.pdfFwdW);
+            trace->add("bsdfDelta", bs.isDelta ? 1.f : 0.f);
+            trace->add("bsdfWeight", bs.weight);
+        }
         beta *= bs.weight;
         rrScale *= maxComponent(bs.weight) * bs.eta * bs.eta;
         if (isBlack(beta)) break;
         if (depth >= 2 && rrScale < 1.f) {
+            if (trace) [[unlikely]] trace->add("rrSurvival", rrScale);
             if (sampler.get1D() >= rrScale) break;
             beta /= rrScale;
             rrScale = 1.f;

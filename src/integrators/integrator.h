@@ -16,12 +16,16 @@
 
 namespace tessera {
 
+class SampleTrace;
+
 /// Everything a sample needs to read; shared by all threads.
 struct RenderContext {
     const Scene& scene;
     const Accel& accel;
     const Camera& camera;
     int maxDepth = -1;  ///< maximum bounces, −1 = unlimited
+    /// Set only by `--debug-pixel`'s replay (integrators/sample_trace.h); null in renders.
+    SampleTrace* trace = nullptr;
 };
 
 /// Contributions to arbitrary pixels (light-tracing style). One sink per tile; entries are merged

@@ -1,6 +1,7 @@
 #include "integrators/light_tracer.h"
 
 #include "integrators/bdpt_connect.h"
+#include "integrators/sample_trace.h"
 
 namespace tessera {
 
@@ -17,8 +18,15 @@ Rgb LightTracer::sample(const RenderContext& ctx, Vec2i, Vec2f, Sampler& sampler
     thread_local std::vector<PathVertex> light;
     int maxVertices = ctx.maxDepth < 0 ? -1 : ctx.maxDepth + 1;
     traceLightSubpath(ctx, sampler, maxVertices, light);
+    if (ctx.trace) [[unlikely]] traceSubpath(*ctx.trace, "light vertex", light);
     for (int s = 1; s <= int(light.size()); ++s) {
         ConnectionResult r = connectBdpt(ctx, light, {}, s, /* t = */ 1, sampler, MisHeuristic::Power, /* computeWeight = */ false);
+        if (ctx.trace) [[unlikely]] {
+            // Light tracing has one strategy per light vertex (t = 1): no MIS weight.
+            ctx.trace->begin("strategy", s, 1);
+            ctx.trace->add("contribution", r.L);
+            ctx.trace->add("raster", Vec3f(r.raster.x, r.raster.y, 0.f));
+        }
         if (!isBlack(r.L)) splats.splat(ctx.camera.width(), ctx.camera.height(), r.raster, r.L);
     }
     return Rgb(0.f);

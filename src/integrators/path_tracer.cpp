@@ -2,6 +2,7 @@
 
 #include "core/frame.h"
 #include "core/sampling.h"
+#include "integrators/sample_trace.h"
 #include "materials/bsdf.h"
 
 namespace tessera {
@@ -33,6 +34,14 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
         if (!ctx.accel.intersect(ray, hit)) break;
         SurfaceInteraction si = scene.interaction(ray, hit);
         Vec3f wo = -glm::normalize(ray.d);
+        SampleTrace* trace = ctx.trace;
+        if (trace) [[unlikely]] {
+            trace->begin("vertex", depth);
+            trace->add("p", si.p);
+            trace->add("ng", si.ng);
+            trace->add("material", float(si.materialId));
+            trace->add("beta", beta);
+        }
 
         // Emission found by BSDF sampling, weighted against the light-sampling strategy.
         if (si.lightIndex != kInvalidId) {
@@ -40,9 +49,20 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
             if (!isBlack(Le)) {
                 if (deltaBounce) {
                     L += beta * Le;
+                    if (trace) [[unlikely]] {
+                        trace->add("Le", Le);
+                        trace->add("emissionMisW", 1.f);
+                        trace->add("emissionContribution", beta * Le);
+                    }
                 } else {
                     float pdfLightW = lights.pdfW(si.lightIndex, prevP, si.p, si.ng);
                     L += beta * Le * powerHeuristic(prevPdfW, pdfLightW);
+                    if (trace) [[unlikely]] {
+                        trace->add("Le", Le);
+                        trace->add("emissionPdfLightW", pdfLightW);
+                        trace->add("emissionMisW", powerHeuristic(prevPdfW, pdfLightW));
+                        trace->add("emissionContribution", beta * Le * powerHeuristic(prevPdfW, pdfLightW));
+                    }
                 }
             }
         }
@@ -67,6 +87,12 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
                 float dist = glm::length(toLight);
                 Vec3f wi = toLight / dist;
                 Vec3f wiL = frame.toLocal(wi);
+                if (trace) [[unlikely]] {
+                    // Recomputing the BSDF density draws no random numbers: the path is unchanged.
+                    trace->add("lightP", ls.p);
+                    trace->add("lightPdfW", ls.pdfW);
+                    if (!ls.isDelta) trace->add("lightBsdfPdfW", pdfBsdfW(mat, woL, wiL));
+                }
                 // Reflection-only BSDFs: wi must leave on wo's side of the *geometric* surface, or a
                 // shading normal would let light through (Veach 1997, §5.3).
                 if (dist > 0.f && glm::dot(wi, si.ng) * woNg > 0.f) {
@@ -75,6 +101,10 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
                         // A point light cannot be hit by BSDF sampling: light sampling is its only strategy.
                         float w = ls.isDelta ? 1.f : powerHeuristic(ls.pdfW, pdfBsdfW(mat, woL, wiL));
                         L += beta * f * ls.Le * (w / ls.pdfW);
+                        if (trace) [[unlikely]] {
+                            trace->add("lightMisW", w);
+                            trace->add("lightContribution", beta * f * ls.Le * (w / ls.pdfW));
+                        }
                     }
                 }
             }
@@ -84,8 +114,18 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
         BsdfSample bs;
         float uLobe = sampler.get1D();
         Vec2f uDir = sampler.get2D();
-        if (!sampleBsdf(mat, woL, uLobe, uDir, TransportMode::Radiance, bs)) break;
+        if (!sampleBsdf(mat, woL, uLobe, uDir, TransportMode::Radiance, bs)) {
+            if (trace) [[unlikely]] trace->add("L", L);
+            break;
+        }
         Vec3f wi = frame.toWorld(bs.wiLocal);
+        if (trace) [[unlikely]] {
+            trace->add("bsdfWi", wi);
+            trace->add("bsdfPdfW", bs.pdfW);
+            trace->add("bsdfDelta", bs.isDelta ? 1.f : 0.f);
+            trace->add("bsdfWeight", bs.weight);
+            trace->add("L", L);
+        }
         bool reflected = bs.wiLocal.z * woL.z > 0.f;
         if (reflected != (glm::dot(wi, si.ng) * woNg > 0.f)) break;  // shading/geometric side mismatch
         beta *= bs.weight;
@@ -99,6 +139,7 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
         float rr = maxComponent(beta) * etaScale;
         if (depth >= 2 && rr < 1.f) {
             float q = std::max(0.f, 1.f - rr);
+            if (trace) [[unlikely]] trace->add("rrSurvival", 1.f - q);
             if (sampler.get1D() < q) break;
             beta /= 1.f - q;
         }

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/fp_env.h"
+#include "integrators/sample_trace.h"
 
 namespace tessera {
 namespace {
@@ -16,17 +17,20 @@ std::string fmt(const Vec3f& v) {
 }
 
 /// An Accel that forwards to another and writes every query and its answer to the trace. The
-/// integrator only sees rays through the Accel interface, so this shows every path vertex and
-/// shadow test without touching integrator code. Used for one sample, never in a render.
+/// integrator only sees rays through the Accel interface, so this shows every ray and shadow test;
+/// what the integrator computes between rays (pdfs, MIS weights, throughput) it records in the
+/// SampleTrace, which also keeps the ray count and the first non-finite value in event order.
+/// Used for one sample, never in a render.
 class TracingAccel : public Accel {
 public:
-    TracingAccel(const Accel& inner, const Scene& scene, std::ostream& trace) : inner_(inner), scene_(scene), out_(trace) {}
+    TracingAccel(const Accel& inner, const Scene& scene, std::ostream& trace, SampleTrace& record)
+        : inner_(inner), scene_(scene), out_(trace), record_(record) {}
     std::string_view name() const override { return inner_.name(); }
     Bounds3f bounds() const override { return inner_.bounds(); }
     AccelStats stats() const override { return inner_.stats(); }
 
     bool intersect(const Ray& ray, Hit& hit) const override {
-        uint64_t k = ++rays_;
+        uint64_t k = ++record_.rays;
         noteNonFinite(ray, k);
         bool found = inner_.intersect(ray, hit);
         out_ << "  ray " << k << ": o=" << fmt(ray.o) << " d=" << fmt(ray.d) << " -> ";
@@ -43,21 +47,18 @@ public:
             if (m.isEmissive()) out_ << " emission=" << fmt(Vec3f(m.emission.r, m.emission.g, m.emission.b));
         }
         out_ << "\n";
-        if (firstNonFinite_.empty() && (!std::isfinite(hit.t) || !isFinite(p) || !isFinite(hit.ng)))
-            firstNonFinite_ = "hit of ray " + std::to_string(k) + " (t, point or normal)";
+        if (!std::isfinite(hit.t) || !isFinite(p) || !isFinite(hit.ng))
+            record_.noteNonFinite("hit of ray " + std::to_string(k) + " (t, point or normal)");
         return true;
     }
     bool occluded(const Ray& ray) const override {
-        uint64_t k = ++rays_;
+        uint64_t k = ++record_.rays;
         noteNonFinite(ray, k);
         bool blocked = inner_.occluded(ray);
         out_ << "  shadow ray " << k << ": o=" << fmt(ray.o) << " d=" << fmt(ray.d) << " tMax=" << ray.tMax << " -> "
              << (blocked ? "occluded" : "visible") << "\n";
         return blocked;
     }
-
-    uint64_t rays() const { return rays_; }
-    const std::string& firstNonFinite() const { return firstNonFinite_; }
 
 private:
     uint32_t materialOf(const Hit& h) const {
@@ -67,15 +68,14 @@ private:
         return kInvalidId;
     }
     void noteNonFinite(const Ray& ray, uint64_t k) const {
-        if (firstNonFinite_.empty() && !isFinite(ray.o)) firstNonFinite_ = "origin of ray " + std::to_string(k) + " " + fmt(ray.o);
-        if (firstNonFinite_.empty() && !isFinite(ray.d)) firstNonFinite_ = "direction of ray " + std::to_string(k) + " " + fmt(ray.d);
+        if (!isFinite(ray.o)) record_.noteNonFinite("origin of ray " + std::to_string(k) + " " + fmt(ray.o));
+        if (!isFinite(ray.d)) record_.noteNonFinite("direction of ray " + std::to_string(k) + " " + fmt(ray.d));
     }
 
     const Accel& inner_;
     const Scene& scene_;
     std::ostream& out_;
-    mutable uint64_t rays_ = 0;
-    mutable std::string firstNonFinite_;
+    SampleTrace& record_;
 };
 
 }  // namespace
@@ -84,8 +84,9 @@ SampleReplay replaySample(const RenderContext& ctx, const Integrator& integrator
                           std::ostream& trace) {
     // The render's worker threads run with flush-to-zero (renderer.cpp); so must the replay.
     ScopedFlushToZero ftz;
-    TracingAccel accel(ctx.accel, ctx.scene, trace);
-    RenderContext traced{ctx.scene, accel, ctx.camera, ctx.maxDepth};
+    SampleTrace record;
+    TracingAccel accel(ctx.accel, ctx.scene, trace, record);
+    RenderContext traced{ctx.scene, accel, ctx.camera, ctx.maxDepth, &record};
     trace << "tessera: debug: replaying pixel (" << id.x << "," << id.y << ") sample " << id.sample << " seed " << seed
           << " with " << integrator.name() << "\n";
     // Exactly the renderer's sequence: Sampler(pixel, sample, seed), jitter from its first 2D draw.
@@ -96,8 +97,12 @@ SampleReplay replaySample(const RenderContext& ctx, const Integrator& integrator
     SampleReplay r;
     r.radiance = integrator.sample(traced, Vec2i(id.x, id.y), raster, sampler, sink);
     r.splats = sink.entries();
-    r.rays = accel.rays();
-    std::string first = accel.firstNonFinite();
+    r.rays = record.rays;
+    r.vertices = record.records().size();
+    // What the integrator recorded between the rays above, one line per vertex or strategy.
+    trace << "  path (" << integrator.name() << "):\n";
+    record.print(trace);
+    std::string first = record.firstNonFinite();
     for (size_t k = 0; k < r.splats.size(); ++k) {
         const SplatSink::Entry& e = r.splats[k];
         uint32_t x = e.pixelIndex % uint32_t(ctx.camera.width()), y = e.pixelIndex / uint32_t(ctx.camera.width());

@@ -17,6 +17,7 @@ struct SampleReplay {
     Rgb radiance{0.f};                        ///< the sample's own estimate (what the film would add)
     std::vector<SplatSink::Entry> splats;     ///< its contributions to other pixels
     uint64_t rays = 0;                        ///< closest-hit and shadow rays cast
+    size_t vertices = 0;                      ///< trace records: path vertices, sub-path vertices, (s,t) strategies
     bool finite = true;                       ///< radiance and every splat finite
 };
 

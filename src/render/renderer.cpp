@@ -1,10 +1,5 @@
 #include "render/renderer.h"
 
-#include <oneapi/tbb/blocked_range.h>
-#include <oneapi/tbb/info.h>
-#include <oneapi/tbb/parallel_for.h>
-#include <oneapi/tbb/task_arena.h>
-
 #include <algorithm>
 #include <chrono>
 #include <mutex>
@@ -12,23 +7,10 @@
 #include <string>
 
 #include "core/fp_env.h"
+#include "core/thread_pool.h"
 
 namespace tessera {
 namespace {
-
-/// ThreadSanitizer cannot see the synchronisation inside Debian's (uninstrumented) libtbb, so it
-/// takes every hand-off of a task between threads for a race. These calls tell it what TBB
-/// guarantees: everything before parallel_for happens before each tile task, and each tile task
-/// happens before parallel_for returns (tools/sanitize.sh). They compile to nothing otherwise.
-#if defined(__SANITIZE_THREAD__)
-extern "C" void __tsan_acquire(void* addr);
-extern "C" void __tsan_release(void* addr);
-inline void tsanRelease(void* addr) { __tsan_release(addr); }
-inline void tsanAcquire(void* addr) { __tsan_acquire(addr); }
-#else
-inline void tsanRelease(void*) {}
-inline void tsanAcquire(void*) {}
-#endif
 
 struct Tile {
     int x0, y0, x1, y1;
@@ -63,8 +45,10 @@ RenderStats renderImage(const RenderContext& ctx, const Integrator& integrator, 
     };
 
     RenderStats stats;
-    stats.threads = opt.threads > 0 ? opt.threads : tbb::info::default_concurrency();
-    tbb::task_arena arena(stats.threads);
+    // Our own pool, not TBB: its mutex/condition-variable hand-offs are visible to ThreadSanitizer,
+    // so tools/sanitize.sh tests the scheduler that every build runs (writeup.md §10).
+    ThreadPool pool(opt.threads);
+    stats.threads = pool.threads();
 
     const bool timed = opt.timeLimitSeconds > 0.0;
     const uint32_t target = timed ? 0xffffffffu : uint32_t(std::max(0, opt.spp));
@@ -106,52 +90,43 @@ RenderStats renderImage(const RenderContext& ctx, const Integrator& integrator, 
         } else {
             std::fill(tileDone.begin(), tileDone.end(), 0);
         }
-        int passStart = 0, passEnd = 0;  // addresses for the TSan hand-off annotations only
-        tsanRelease(&passStart);
-        arena.execute([&] {
+        // One item per tile, claimed in tile order; parallelFor returns when the pass is done (the
+        // barrier before the splat merge and the checkpoint). The interrupt flag is read before
+        // every tile, so a stop request skips the tiles not yet started.
+        pool.parallelFor(tiles.size(), [&](size_t t) {
+            if (tileDone[t] || cancelled()) return;
+            // FTZ/DAZ while the tile renders, restored after it (MXCSR is per thread, and the
+            // caller's thread renders tiles too, then goes on to read and write images).
             ScopedFlushToZero ftz;
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
-                // FTZ/DAZ in whichever thread runs the tile (MXCSR is per thread): a few cycles per
-                // tile. Set here rather than by a tbb::task_scheduler_observer, whose proxy oneTBB
-                // 2021.8 leaks when the arena goes away (LeakSanitizer, tools/sanitize.sh).
-                ScopedFlushToZero tileFtz;
-                tsanAcquire(&passStart);
-                for (size_t t = r.begin(); t != r.end(); ++t) {
-                    if (tileDone[t]) continue;
-                    if (cancelled()) return;
-                    const Tile& tile = tiles[t];
-                    SplatSink& sink = splats[t];
-                    uint64_t bad = 0;
-                    std::optional<SampleId> tileFirst;
-                    for (int y = tile.y0; y < tile.y1; ++y)
-                        for (int x = tile.x0; x < tile.x1; ++x)
-                            for (uint32_t s = s0; s < s0 + n; ++s) {
-                                Sampler sampler(Vec2i(x, y), s, opt.seed);
-                                Vec2f raster = Vec2f(float(x), float(y)) + sampler.get2D();
-                                size_t splatsBefore = sink.entries().size();
-                                Rgb L = integrator.sample(ctx, Vec2i(x, y), raster, sampler, sink);
-                                bool finite = isFinite(L);
-                                if (finite) film.addSample(x, y, L);
-                                else ++bad;
-                                // Non-finite splats are dropped at the merge; note their sample here.
-                                for (size_t k = splatsBefore; finite && k < sink.entries().size(); ++k)
-                                    finite = isFinite(sink.entries()[k].value);
-                                SampleId id{x, y, s};
-                                if (!finite && (!tileFirst || id < *tileFirst)) tileFirst = id;
-                            }
-                    if (bad) nonFinite.fetch_add(bad, std::memory_order_relaxed);
-                    if (tileFirst) {
-                        std::lock_guard<std::mutex> lock(firstMutex);
-                        if (!firstNonFinite || *tileFirst < *firstNonFinite) firstNonFinite = tileFirst;
+            const Tile& tile = tiles[t];
+            SplatSink& sink = splats[t];
+            uint64_t bad = 0;
+            std::optional<SampleId> tileFirst;
+            for (int y = tile.y0; y < tile.y1; ++y)
+                for (int x = tile.x0; x < tile.x1; ++x)
+                    for (uint32_t s = s0; s < s0 + n; ++s) {
+                        Sampler sampler(Vec2i(x, y), s, opt.seed);
+                        Vec2f raster = Vec2f(float(x), float(y)) + sampler.get2D();
+                        size_t splatsBefore = sink.entries().size();
+                        Rgb L = integrator.sample(ctx, Vec2i(x, y), raster, sampler, sink);
+                        bool finite = isFinite(L);
+                        if (finite) film.addSample(x, y, L);
+                        else ++bad;
+                        // Non-finite splats are dropped at the merge; note their sample here.
+                        for (size_t k = splatsBefore; finite && k < sink.entries().size(); ++k)
+                            finite = isFinite(sink.entries()[k].value);
+                        SampleId id{x, y, s};
+                        if (!finite && (!tileFirst || id < *tileFirst)) tileFirst = id;
                     }
-                    tileDone[t] = 1;
-                    tilesRendered.fetch_add(1, std::memory_order_relaxed);
-                    if (opt.progress) opt.progress->advance(uint64_t(tile.x1 - tile.x0) * uint64_t(tile.y1 - tile.y0) * n);
-                }
-                tsanRelease(&passEnd);
-            }, tbb::simple_partitioner());
+            if (bad) nonFinite.fetch_add(bad, std::memory_order_relaxed);
+            if (tileFirst) {
+                std::lock_guard<std::mutex> lock(firstMutex);
+                if (!firstNonFinite || *tileFirst < *firstNonFinite) firstNonFinite = tileFirst;
+            }
+            tileDone[t] = 1;
+            tilesRendered.fetch_add(1, std::memory_order_relaxed);
+            if (opt.progress) opt.progress->advance(uint64_t(tile.x1 - tile.x0) * uint64_t(tile.y1 - tile.y0) * n);
         });
-        tsanAcquire(&passEnd);
         bool complete = std::all_of(tileDone.begin(), tileDone.end(), [](uint8_t d) { return d != 0; });
         // Stopped mid-pass: the checkpoint keeps this pass's splats unmerged (tile order, see above).
         if (!complete && opt.onPassEnd) opt.onPassEnd(film, stateNow(/* withPartialPass = */ true), true);

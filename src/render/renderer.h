@@ -1,7 +1,7 @@
 #pragma once
 /// \file renderer.h
-/// The tiled, multithreaded scheduler. The image is cut into square tiles rendered by a TBB task
-/// arena in progressive passes (1, 1, 2, 4, … samples per pixel, at most 16 per pass). Every sample
+/// The tiled, multithreaded scheduler. The image is cut into square tiles rendered by our own thread
+/// pool (core/thread_pool.h) in progressive passes (1, 1, 2, 4, … samples per pixel, at most 16 per pass). Every sample
 /// is seeded by (pixel, sample index, seed), each tile accumulates its pixels' samples in index
 /// order and splats are merged in tile order, so the image is bit-identical for any thread count.
 #include <atomic>
@@ -44,7 +44,7 @@ struct RenderState {
 struct RenderOptions {
     int spp = 16;                   ///< samples per pixel (ignored when timeLimitSeconds > 0)
     double timeLimitSeconds = 0.0;  ///< > 0: render passes until this budget is spent
-    int threads = 0;                ///< 0 = all cores
+    int threads = 0;                ///< 0 = all cores the process may use (hardwareThreads())
     uint64_t seed = 0;
     int tileSize = 32;
     const std::atomic<bool>* cancel = nullptr;  ///< checked before every tile
