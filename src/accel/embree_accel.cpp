@@ -134,17 +134,20 @@ EmbreeAccel::EmbreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
     // Memory of the structure itself, as for our own (accel.h: excluding the scene's vertex data):
     // the bytes Embree's allocator still holds after the build minus those it held before, seen
     // through its memory monitor (temporary build memory is freed by then).
+    // The monitor runs on Embree's build threads. Release increments and the acquire load below
+    // order every one of them before this thread reuses the counter's stack slot: Embree's own
+    // join inside rtcCommitScene does too, but in uninstrumented code TSan cannot see.
     std::atomic<int64_t> liveBytes{0};
     rtcSetDeviceMemoryMonitorFunction(
         device,
         [](void* user, ssize_t bytes, bool) {
-            static_cast<std::atomic<int64_t>*>(user)->fetch_add(int64_t(bytes), std::memory_order_relaxed);
+            static_cast<std::atomic<int64_t>*>(user)->fetch_add(int64_t(bytes), std::memory_order_acq_rel);
             return true;
         },
         &liveBytes);
     rtcCommitScene(scene);
     rtcSetDeviceMemoryMonitorFunction(device, nullptr, nullptr);
-    stats_.memoryBytes = size_t(std::max<int64_t>(0, liveBytes.load()));
+    stats_.memoryBytes = size_t(std::max<int64_t>(0, liveBytes.load(std::memory_order_acquire)));
 
     RTCBounds b;
     rtcGetSceneBounds(scene, &b);
