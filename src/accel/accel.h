@@ -57,9 +57,12 @@ std::unique_ptr<Accel> createAccel(std::string_view name, const SceneGeometry& g
                                    const AccelOptions& options = {});
 
 /// True when the ray can be traced at all (finite origin and direction, non-zero direction, tMin ≤ tMax).
+/// Branch-light: x·0 is 0 for finite x and NaN for ±inf and NaN, so one sum tests all six
+/// coordinates (this runs once per ray in every traversal kernel).
 inline bool isTraceableRay(const Ray& r) {
-    return isFinite(r.o) && isFinite(r.d) && (r.d.x != 0.f || r.d.y != 0.f || r.d.z != 0.f) &&
-           !std::isnan(r.tMin) && !std::isnan(r.tMax) && r.tMin <= r.tMax;
+    float zero = r.o.x * 0.f + r.o.y * 0.f + r.o.z * 0.f + r.d.x * 0.f + r.d.y * 0.f + r.d.z * 0.f;
+    bool nonZeroDirection = (r.d.x != 0.f) | (r.d.y != 0.f) | (r.d.z != 0.f);
+    return (zero == 0.f) & nonZeroDirection & (r.tMin <= r.tMax);  // false for a NaN tMin or tMax too
 }
 
 }  // namespace tessera

@@ -7,6 +7,7 @@
 /// are bit-identical to the brute-force backend at either width. Unused lanes hold NaN vertices,
 /// which the test rejects without a separate mask. Eight lanes are one instruction per step inside
 /// `target("avx2")` code and two SSE halves elsewhere.
+#include <cmath>
 #include <cstdint>
 #include <utility>
 
@@ -45,15 +46,18 @@ struct TriRayW {
     typename Lanes<W>::F ox, oy, oz, sx, sy, sz;
     TESSERA_INLINE explicit TriRayW(const Ray& ray) : tMin(ray.tMin) {
         using L = Lanes<W>;
-        Vec3f ad = glm::abs(ray.d);
-        kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-        kx = (kz + 1) % 3;
-        ky = (kx + 1) % 3;
-        if (ray.d[kz] < 0.f) std::swap(kx, ky);
-        sx = L::splat(ray.d[kx] / ray.d[kz]);
-        sy = L::splat(ray.d[ky] / ray.d[kz]);
-        sz = L::splat(1.f / ray.d[kz]);
-        ox = L::splat(ray.o[kx]), oy = L::splat(ray.o[ky]), oz = L::splat(ray.o[kz]);
+        // Plain arrays: glm's operator[] with a run-time index compiles to a branch per access.
+        const float d[3] = {ray.d.x, ray.d.y, ray.d.z}, o[3] = {ray.o.x, ray.o.y, ray.o.z};
+        float ax = std::abs(d[0]), ay = std::abs(d[1]), az = std::abs(d[2]);
+        kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+        static constexpr int kNext[3] = {1, 2, 0};
+        kx = kNext[kz];
+        ky = kNext[kx];
+        if (d[kz] < 0.f) std::swap(kx, ky);
+        sx = L::splat(d[kx] / d[kz]);
+        sy = L::splat(d[ky] / d[kz]);
+        sz = L::splat(1.f / d[kz]);
+        ox = L::splat(o[kx]), oy = L::splat(o[ky]), oz = L::splat(o[kz]);
     }
 };
 using TriRay = TriRayW<4>;
