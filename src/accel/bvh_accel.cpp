@@ -252,7 +252,12 @@ uint32_t BvhAccel::makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf) {
             t.primId[lane] = ref.primId;
         }
     }
-    return kLeafBit | (firstBlock << 2) | (blocks - 1);
+    // The first block's byte offset in 16-byte units (bits 2–29), so that the traversal finds it
+    // with a mask and a shift (leafBlocks()).
+    static_assert(sizeof(Triangle4) % 16 == 0);
+    size_t units = size_t(firstBlock) * (sizeof(Triangle4) / 16);
+    if (units >= (size_t(1) << 28)) throw std::runtime_error("bvh: more than 4 GiB of leaf triangles");
+    return kLeafBit | (uint32_t(units) << 2) | (blocks - 1);
 }
 
 uint32_t BvhAccel::collapse(const BinaryBvh& bin, uint32_t binNode) {
@@ -299,7 +304,7 @@ TESSERA_INLINE void BvhAccel::prefetchChild(uint32_t ref) const {
     const char* p;
     int lines;
     if (!(ref & kLeafBit)) p = reinterpret_cast<const char*>(&node(ref)), lines = 4;
-    else if (!(ref & kMixedBit)) p = reinterpret_cast<const char*>(&triangles_[(ref & ~kLeafBit) >> 2]), lines = 3 * (int(ref & 3u) + 1);
+    else if (!(ref & kMixedBit)) p = reinterpret_cast<const char*>(leafBlocks(ref)), lines = 3 * (int(ref & 3u) + 1);
     else return;
     for (int l = 0; l < lines; ++l) __builtin_prefetch(p + 64 * l);
 }
@@ -349,9 +354,10 @@ TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                 continue;
             }
         } else if (!(ref & kMixedBit)) {
-            uint32_t first = (ref & ~kLeafBit) >> 2, blocks = (ref & 3u) + 1;
+            const Triangle4* blockPtr = leafBlocks(ref);
+            uint32_t blocks = (ref & 3u) + 1;
             for (uint32_t b = 0; b < blocks; ++b) {
-                const Triangle4& tri = triangles_[first + b];
+                const Triangle4& tri = blockPtr[b];
                 TriangleCandidate c = intersectTriangle4(triRay, tri, tMax);
                 if (c.lane < 0) continue;
                 tMax = c.t, bestU = c.u, bestV = c.v;
@@ -420,9 +426,10 @@ TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
                 continue;
             }
         } else if (!(ref & kMixedBit)) {
-            uint32_t first = (ref & ~kLeafBit) >> 2, blocks = (ref & 3u) + 1;
+            const Triangle4* blockPtr = leafBlocks(ref);
+            uint32_t blocks = (ref & 3u) + 1;
             for (uint32_t b = 0; b < blocks; ++b)
-                if (occludedTriangle4(triRay, triangles_[first + b], tMax)) return true;
+                if (occludedTriangle4(triRay, blockPtr[b], tMax)) return true;
         } else {
             uint32_t first = (ref & ~(kLeafBit | kMixedBit)) >> 4, count = ref & 15u;
             MixedCandidate unused;
@@ -531,7 +538,7 @@ std::string BvhAccel::checkInvariants() const {
                 todo.push_back({uint32_t(ref / sizeof(Node8)), box});
             }
             else if (!(ref & kMixedBit)) {
-                uint32_t first = (ref & ~kLeafBit) >> 2, blocks = (ref & 3u) + 1;
+                uint32_t first = uint32_t(leafBlocks(ref) - triangles_.data()), blocks = (ref & 3u) + 1;
                 for (uint32_t b = 0; b < blocks; ++b)
                     for (int lane = 0; lane < 4; ++lane)
                         if (triangles_[first + b].primId[lane] != kInvalidId)

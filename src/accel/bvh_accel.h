@@ -53,8 +53,9 @@ public:
         uint32_t geomId, primId;
     };
 
-    /// Child reference: inner node (its byte offset in the node array, once built), or a leaf (kLeafBit). Triangle-only leaf: first Triangle4
-    /// block << 2 | (blocks − 1). Leaf holding a sphere (kMixedBit): first mixedPrims_ index << 4 | count.
+    /// Child reference: inner node (its byte offset in the node array, once built), or a leaf
+    /// (kLeafBit). Triangle-only leaf: the first Triangle4 block's byte offset / 16, << 2 | (blocks − 1).
+    /// Leaf holding a sphere (kMixedBit): first mixedPrims_ index << 4 | count.
     static constexpr uint32_t kLeafBit = 0x80000000u;
     static constexpr uint32_t kMixedBit = 0x40000000u;
 
@@ -65,6 +66,10 @@ private:
     bool occludedAvx2(const Ray& ray) const;
 
     void prefetchChild(uint32_t ref) const;
+    /// The first Triangle4 block of a triangle leaf reference.
+    const Triangle4* leafBlocks(uint32_t ref) const {
+        return reinterpret_cast<const Triangle4*>(reinterpret_cast<const char*>(triangles_.data()) + size_t(ref & 0x3ffffffcu) * 4);
+    }
     /// The inner node an inner child reference (a byte offset into nodes_) names.
     const Node8& node(uint32_t ref) const { return *reinterpret_cast<const Node8*>(reinterpret_cast<const char*>(nodes_.data()) + ref); }
     uint32_t collapse(const BinaryBvh& bin, uint32_t binNode);
