@@ -59,6 +59,22 @@ TESSERA_INLINE uint32_t moveMask8(Vi8 m) {
 #endif
 }
 
+/// moveMask8 for code that knows its instruction set at compile time: inside the AVX2 traversal
+/// one vmovmskps on the whole 8-lane register (its latency sits between every box test and the
+/// next node's address), elsewhere the two halves. Inline assembly, because the intrinsic cannot
+/// be inlined into the traversal template, whose default-target body is shared by both builds.
+template <bool kAvx>
+TESSERA_INLINE uint32_t moveMask8Isa(Vi8 m) {
+#if defined(TESSERA_X86)
+    if constexpr (kAvx) {
+        uint32_t bits;
+        asm("vmovmskps %1, %0" : "=r"(bits) : "x"(m));
+        return bits;
+    }
+#endif
+    return moveMask8(m);
+}
+
 TESSERA_INLINE uint32_t moveMask4(Vi4 m) {
 #if defined(TESSERA_X86)
     return uint32_t(_mm_movemask_ps(reinterpret_cast<__m128>(m)));
