@@ -81,8 +81,12 @@ struct BoxRay {
         Vf8 txF = (load8(n.bounds[farX]) - ox) * rdxFar;
         Vf8 tyF = (load8(n.bounds[farY]) - oy) * rdyFar;
         Vf8 tzF = (load8(n.bounds[farZ]) - oz) * rdzFar;
-        tNear = maxNanB(txN, maxNanB(tyN, maxNanB(tzN, tMin)));
-        Vf8 tFar = minNanB(txF, minNanB(tyF, minNanB(tzF, tMaxPadded)));
+        // Two levels instead of a chain of three (the box test's latency sits between a node and
+        // the next). A NaN slab (origin in the slab plane of a zero direction component) in the
+        // first operand is skipped; one from tzN/tzF makes its pair NaN, and the pair is then
+        // skipped too, which only loosens the test (never culls a box the ray enters).
+        tNear = maxNanB(maxNanB(tyN, tzN), maxNanB(txN, tMin));
+        Vf8 tFar = minNanB(minNanB(tyF, tzF), minNanB(txF, tMaxPadded));
         return tNear <= tFar;
     }
 };
