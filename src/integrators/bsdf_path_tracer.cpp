@@ -22,11 +22,7 @@ Rgb BsdfPathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
         if (si.lightIndex != kInvalidId) L += beta * scene.lights().emitted(si.lightIndex, si.ng, wo);
         SampleTrace* trace = ctx.trace;
         if (trace) [[unlikely]] {
-            trace->begin("vertex", depth);
-            trace->add("p", si.p);
-            trace->add("ng", si.ng);
-            trace->add("material", float(si.materialId));
-            trace->add("beta", beta);
+            trace->vertex(depth, si.p, si.ng, si.materialId, beta);
             if (si.lightIndex != kInvalidId) trace->add("emissionContribution", beta * scene.lights().emitted(si.lightIndex, si.ng, wo));
             trace->add("L", L);
         }
@@ -38,10 +34,7 @@ Rgb BsdfPathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
         Vec2f uDir = sampler.get2D();
         if (!bsdf.sample(wo, uLobe, uDir, TransportMode::Radiance, bs)) break;
         if (trace) [[unlikely]] {
-            trace->add("bsdfWi", bs.wiWorld);
-            trace->add("bsdfPdfW", bs.pdfFwdW);
-            trace->add("bsdfDelta", bs.isDelta ? 1.f : 0.f);
-            trace->add("bsdfWeight", bs.weight);
+            trace->bsdfSample(bs.wiWorld, bs.pdfFwdW, bs.isDelta, bs.weight);
         }
         beta *= bs.weight;
         rrScale *= maxComponent(bs.weight) * bs.eta * bs.eta;

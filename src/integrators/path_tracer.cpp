@@ -36,11 +36,7 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
         Vec3f wo = -glm::normalize(ray.d);
         SampleTrace* trace = ctx.trace;
         if (trace) [[unlikely]] {
-            trace->begin("vertex", depth);
-            trace->add("p", si.p);
-            trace->add("ng", si.ng);
-            trace->add("material", float(si.materialId));
-            trace->add("beta", beta);
+            trace->vertex(depth, si.p, si.ng, si.materialId, beta);
         }
 
         // Emission found by BSDF sampling, weighted against the light-sampling strategy.
@@ -120,10 +116,7 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
         }
         Vec3f wi = frame.toWorld(bs.wiLocal);
         if (trace) [[unlikely]] {
-            trace->add("bsdfWi", wi);
-            trace->add("bsdfPdfW", bs.pdfW);
-            trace->add("bsdfDelta", bs.isDelta ? 1.f : 0.f);
-            trace->add("bsdfWeight", bs.weight);
+            trace->bsdfSample(wi, bs.pdfW, bs.isDelta, bs.weight);
             trace->add("L", L);
         }
         bool reflected = bs.wiLocal.z * woL.z > 0.f;

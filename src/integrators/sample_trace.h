@@ -40,6 +40,21 @@ public:
     void add(const char* name, float v) { push({name, 1, {v, 0.f, 0.f}}); }
     /// Points, directions and colours (Rgb is the same glm type as Vec3f).
     void add(const char* name, const Vec3f& v) { push({name, 3, {v.x, v.y, v.z}}); }
+    /// The record of a path vertex as the path tracers write it (position, geometric normal,
+    /// material, throughput so far), and the BSDF sample taken there.
+    void vertex(int depth, const Vec3f& p, const Vec3f& ng, uint32_t materialId, const Vec3f& beta) {
+        begin("vertex", depth);
+        add("p", p);
+        add("ng", ng);
+        add("material", float(materialId));
+        add("beta", beta);
+    }
+    void bsdfSample(const Vec3f& wi, float pdfW, bool isDelta, const Vec3f& weight) {
+        add("bsdfWi", wi);
+        add("bsdfPdfW", pdfW);
+        add("bsdfDelta", isDelta ? 1.f : 0.f);
+        add("bsdfWeight", weight);
+    }
     /// Remembers `where` as the first non-finite value unless one was seen already.
     void noteNonFinite(const std::string& where) {
         if (firstNonFinite_.empty()) firstNonFinite_ = where;
