@@ -110,6 +110,27 @@ private:
         return slot;
     }
 
+    /// Prices the plane before every bin of one axis from both ends (the references counted left
+    /// where they enter, right where they exit: the same bin for object splits) and keeps the
+    /// cheapest in `best`.
+    void sweep(const Bounds3f* box, const uint32_t* enter, const uint32_t* exit, Choice::Kind kind, int axis,
+               Choice& best) const {
+        Bounds3f rightBox[kBins];
+        uint32_t rightCount[kBins];
+        Bounds3f acc;
+        uint32_t cnt = 0;
+        for (int i = kBins - 1; i > 0; --i) acc.extend(box[i]), cnt += exit[i], rightBox[i] = acc, rightCount[i] = cnt;
+        acc = Bounds3f();
+        cnt = 0;
+        for (int i = 1; i < kBins; ++i) {
+            acc.extend(box[i - 1]);
+            cnt += enter[i - 1];
+            if (cnt == 0 || rightCount[i] == 0) continue;
+            float cost = halfArea(acc) * blocks(cnt) + halfArea(rightBox[i]) * blocks(rightCount[i]);
+            if (cost < best.cost) best = {kind, axis, i, cost, acc, rightBox[i], cnt, rightCount[i]};
+        }
+    }
+
     /// Binned object split on reference centroids (Wald 2007), as in bvh_builder.cpp.
     Choice objectSplit(const std::vector<SRef>& refs, const Bounds3f& centroidBox) const {
         Choice best;
@@ -124,21 +145,7 @@ private:
                 box[b].extend(r.box);
                 ++count[b];
             }
-            Bounds3f rightBox[kBins];
-            uint32_t rightCount[kBins];
-            Bounds3f acc;
-            uint32_t cnt = 0;
-            for (int i = kBins - 1; i > 0; --i) acc.extend(box[i]), cnt += count[i], rightBox[i] = acc, rightCount[i] = cnt;
-            acc = Bounds3f();
-            cnt = 0;
-            for (int i = 1; i < kBins; ++i) {
-                acc.extend(box[i - 1]);
-                cnt += count[i - 1];
-                if (cnt == 0 || rightCount[i] == 0) continue;
-                float cost = halfArea(acc) * blocks(cnt) + halfArea(rightBox[i]) * blocks(rightCount[i]);
-                if (cost < best.cost)
-                    best = {Choice::kObject, a, i, cost, acc, rightBox[i], cnt, rightCount[i]};
-            }
+            sweep(box, count, count, Choice::kObject, a, best);
         }
         return best;
     }
@@ -186,20 +193,7 @@ private:
                 ++enter[b0];
                 ++exit[b1];
             }
-            Bounds3f rightBox[kBins];
-            uint32_t rightCount[kBins];
-            Bounds3f acc;
-            uint32_t cnt = 0;
-            for (int i = kBins - 1; i > 0; --i) acc.extend(box[i]), cnt += exit[i], rightBox[i] = acc, rightCount[i] = cnt;
-            acc = Bounds3f();
-            cnt = 0;
-            for (int i = 1; i < kBins; ++i) {
-                acc.extend(box[i - 1]);
-                cnt += enter[i - 1];
-                if (cnt == 0 || rightCount[i] == 0) continue;
-                float cost = halfArea(acc) * blocks(cnt) + halfArea(rightBox[i]) * blocks(rightCount[i]);
-                if (cost < best.cost) best = {Choice::kSpatial, a, i, cost, acc, rightBox[i], cnt, rightCount[i]};
-            }
+            sweep(box, enter, exit, Choice::kSpatial, a, best);
         }
         return best;
     }
