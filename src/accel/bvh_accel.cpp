@@ -336,14 +336,30 @@ TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
             Vf8 tNear;
             uint32_t mask = moveMask8Isa<kAvx>(boxRay.test(node, tMaxPadded, tNear));
             if (mask) {
-                if (!(mask & (mask - 1))) {  // one child: no ordering needed
-                    ref = node.child[__builtin_ctz(mask)];
+                int i0 = __builtin_ctz(mask);
+                mask &= mask - 1;
+                if (!mask) {  // one child: no ordering needed
+                    ref = node.child[i0];
+                    continue;
+                }
+                // Two children, the most common case after one: one compare, one push.
+                int i1 = __builtin_ctz(mask);
+                mask &= mask - 1;
+                StackEntry e0{node.child[i0], tNear[i0]}, e1{node.child[i1], tNear[i1]};
+                prefetchChild(e0.ref);
+                prefetchChild(e1.ref);
+                if (!mask) {
+                    bool firstNearer = e0.tNear < e1.tNear;
+                    stack[sp++] = firstNearer ? e1 : e0;
+                    ref = firstNearer ? e0.ref : e1.ref;
                     continue;
                 }
                 // Nearest-first: sort the hit children by entry distance (insertion sort, ≤ 8),
                 // push all but the nearest in far-to-near order, descend into the nearest.
                 StackEntry hits[8];
-                int n = 0;
+                hits[0] = e0.tNear < e1.tNear ? e1 : e0;
+                hits[1] = e0.tNear < e1.tNear ? e0 : e1;
+                int n = 2;
                 while (mask) {
                     int i = __builtin_ctz(mask);
                     mask &= mask - 1;
