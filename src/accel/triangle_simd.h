@@ -102,7 +102,11 @@ TESSERA_INLINE TriangleCandidate intersectTriangles(const TriRayW<W>& r, const f
     I sameSign = ((U >= zero) & (V >= zero) & (Wf >= zero)) | ((U <= zero) & (V <= zero) & (Wf <= zero));
     F det = U + V + Wf;
     I valid = sameSign & (det != zero);
-    if (!L::mask(valid)) return {0.f, 0.f, 0.f, -1};
+    // The closest-hit test leaves here when no lane can hit (it saves the division); the any-hit
+    // test goes straight on to its single final branch (+1–2% on shadow rays: this exit was
+    // mispredicted more often than the division cost).
+    if constexpr (!kAnyHit)
+        if (!L::mask(valid)) return {0.f, 0.f, 0.f, -1};
     F T = U * (sz * aZ) + V * (sz * bZ) + Wf * (sz * cZ);
     F invDet = L::splat(1.f) / det;
     F t = T * invDet;
