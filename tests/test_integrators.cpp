@@ -28,11 +28,7 @@ Film renderWith(const Scene& scene, const char* integratorName, int w, int h, in
     Camera camera(*scene.camera, w, h);
     RenderContext ctx{scene, *accel, camera, maxDepth};
     Film film(w, h);
-    RenderOptions opt;
-    opt.spp = spp;
-    opt.seed = seed;
-    opt.threads = threads;
-    opt.tileSize = 16;
+    RenderOptions opt{.spp = spp, .threads = threads, .seed = seed, .tileSize = 16};
     RenderStats stats = renderImage(ctx, *integrator, film, opt);
     EXPECT_EQ(stats.nonFiniteDropped, 0u) << integratorName;
     return film;

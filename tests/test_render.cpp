@@ -18,9 +18,7 @@ void expectFurnace(const Scene& scene, Rgb albedo, Rgb Le, int spp) {
     Camera camera(*scene.camera, 48, 48);
     RenderContext ctx{scene, *accel, camera, -1};
     Film film(48, 48);
-    RenderOptions opt;
-    opt.spp = spp;
-    opt.seed = 1234;
+    RenderOptions opt{.spp = spp, .seed = 1234};
     RenderStats stats = renderImage(ctx, *integrator, film, opt);
     EXPECT_EQ(stats.nonFiniteDropped, 0u);
     double mean[3], se[3];
@@ -55,11 +53,7 @@ TEST(Determinism, OneAndTwoThreadsGiveTheSameBits) {
     std::vector<float> images[2];
     for (int threads : {1, 2}) {
         Film film(80, 60);
-        RenderOptions opt;
-        opt.spp = 8;
-        opt.threads = threads;
-        opt.tileSize = 16;
-        opt.seed = 7;
+        RenderOptions opt{.spp = 8, .threads = threads, .seed = 7, .tileSize = 16};
         renderImage(ctx, *integrator, film, opt);
         images[threads - 1] = film.rgba();
     }
@@ -79,9 +73,7 @@ TEST(Render, CancelledRenderStopsAndKeepsWhatItHas) {
     RenderContext ctx{scene, *accel, camera, -1};
     Film film(64, 64);
     std::atomic<bool> cancel{true};
-    RenderOptions opt;
-    opt.spp = 4;
-    opt.cancel = &cancel;
+    RenderOptions opt{.spp = 4, .cancel = &cancel};
     RenderStats stats = renderImage(ctx, *integrator, film, opt);
     EXPECT_TRUE(stats.interrupted);
     EXPECT_EQ(stats.sppCompleted, 0u);

@@ -103,10 +103,7 @@ TEST(Scheduler, RenderPropagatesIntegratorExceptionsAndRestoresFpMode) {
 #endif
     for (int threads : {1, 3}) {
         Film film(40, 40);
-        RenderOptions opt;
-        opt.spp = 2;
-        opt.threads = threads;
-        opt.tileSize = 8;
+        RenderOptions opt{.spp = 2, .threads = threads, .tileSize = 8};
         ThrowingIntegrator throwing;
         EXPECT_THROW(renderImage(ctx, throwing, film, opt), std::runtime_error) << threads << " threads";
         auto ptnee = createIntegrator("ptnee");

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "io/image_output.h"
 #include "render/debug_pixel.h"
@@ -112,6 +113,24 @@ private:
     }
 };
 
+/// Runs one `--debug-pixel` replay: its JSON report (stdout) and its trace (stderr, kept in
+/// `tracePath`). Throws when the command cannot start or fails (gtest reports the test as failed).
+struct Replay {
+    nlohmann::json json;
+    std::string trace;
+};
+Replay runReplay(const std::string& command, const std::filesystem::path& tracePath) {
+    std::string cmd = command + " 2> '" + tracePath.string() + "'";
+    FILE* p = popen(cmd.c_str(), "r");
+    if (!p) throw std::runtime_error("cannot run " + cmd);
+    std::string out;
+    char buf[4096];
+    while (size_t n = std::fread(buf, 1, sizeof buf, p)) out.append(buf, n);
+    if (pclose(p) != 0) throw std::runtime_error("failed: " + cmd);
+    std::ifstream in(tracePath);
+    return {nlohmann::json::parse(out), std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>())};
+}
+
 }  // namespace
 
 TEST(NonFinite, DroppedCountedAndFirstNamedForAnyThreadCount) {
@@ -126,11 +145,7 @@ TEST(NonFinite, DroppedCountedAndFirstNamedForAnyThreadCount) {
     integrator.infSplatFrom = {39, 23, 1};
     for (int threads : {1, 2}) {
         Film film(40, 24);
-        RenderOptions opt;
-        opt.spp = 8;
-        opt.seed = 9;
-        opt.threads = threads;
-        opt.tileSize = 8;
+        RenderOptions opt{.spp = 8, .threads = threads, .seed = 9, .tileSize = 8};
         RenderStats stats = renderImage(ctx, integrator, film, opt);
         EXPECT_EQ(stats.nonFiniteDropped, 5u) << threads;
         ASSERT_TRUE(stats.firstNonFinite.has_value());
@@ -144,9 +159,7 @@ TEST(NonFinite, DroppedCountedAndFirstNamedForAnyThreadCount) {
     }
     integrator.infSplatFrom = {-1, -1, 0};
     Film film(40, 24);
-    RenderOptions opt;
-    opt.spp = 8;
-    opt.seed = 9;
+    RenderOptions opt{.spp = 8, .seed = 9};
     RenderStats stats = renderImage(ctx, integrator, film, opt);
     ASSERT_TRUE(stats.firstNonFinite.has_value());
     EXPECT_EQ(stats.firstNonFinite->x, 30);
@@ -176,19 +189,11 @@ TEST(DebugPixel, ReplayEqualsTheOneSampleRenderBitForBit) {
         int nonZero = 0;
         TraceSummary total;
         for (auto [x, y] : {std::pair{20, 15}, {3, 27}, {33, 4}, {11, 9}, {39, 29}, {0, 0}}) {
-            std::string cmd = base + "--integrator " + integrator + " --json --debug-pixel " + std::to_string(x) + "," +
-                              std::to_string(y) + ",0 2> '" + (dir / "trace.txt").string() + "'";
-            FILE* p = popen(cmd.c_str(), "r");
-            ASSERT_NE(p, nullptr);
-            std::string out;
-            char buf[4096];
-            while (size_t n = std::fread(buf, 1, sizeof buf, p)) out.append(buf, n);
-            ASSERT_EQ(pclose(p), 0) << cmd;
-            nlohmann::json j = nlohmann::json::parse(out);
+            auto [j, trace] = runReplay(base + "--integrator " + integrator + " --json --debug-pixel " + std::to_string(x) +
+                                            "," + std::to_string(y) + ",0",
+                                        dir / "trace.txt");
             EXPECT_TRUE(j["finite"].get<bool>());
             EXPECT_GT(j["rays"].get<int>(), 0);
-            std::ifstream in(dir / "trace.txt");
-            std::string trace((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
             TraceSummary t = checkTrace(trace);
             // A camera ray that hits the box makes at least one vertex; one record per vertex.
             if (trace.find("ray 1: o=") != std::string::npos && trace.find("-> hit") != std::string::npos) {
@@ -217,17 +222,8 @@ TEST(DebugPixel, ReplayEqualsTheOneSampleRenderBitForBit) {
     // Light tracing and BDPT: sub-path vertices with their area densities, and per (s,t) strategy
     // the contribution (and for BDPT the MIS weight).
     for (const char* integrator : {"lt", "bdpt"}) {
-        std::string cmd = base + "--integrator " + integrator + " --json --debug-pixel 20,15,0 2> '" + (dir / "trace.txt").string() + "'";
-        FILE* p = popen(cmd.c_str(), "r");
-        ASSERT_NE(p, nullptr);
-        std::string out;
-        char buf[4096];
-        while (size_t n = std::fread(buf, 1, sizeof buf, p)) out.append(buf, n);
-        ASSERT_EQ(pclose(p), 0) << cmd;
-        nlohmann::json j = nlohmann::json::parse(out);
+        auto [j, trace] = runReplay(base + "--integrator " + integrator + " --json --debug-pixel 20,15,0", dir / "trace.txt");
         EXPECT_TRUE(j["finite"].get<bool>());
-        std::ifstream in(dir / "trace.txt");
-        std::string trace((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
         TraceSummary t = checkTrace(trace);
         EXPECT_GE(t.subpathPdfs, 1) << trace;
         EXPECT_GE(t.strategyLines, 1) << trace;

@@ -78,9 +78,7 @@ Film render(const Scene& scene, const Accel& accel, const std::string& integrato
     Camera camera(*scene.camera, w, h);
     RenderContext ctx{scene, accel, camera, -1};
     Film film(w, h);
-    RenderOptions opt;
-    opt.spp = spp;
-    opt.seed = seed;
+    RenderOptions opt{.spp = spp, .seed = seed};
     RenderStats stats = renderImage(ctx, *integrator, film, opt);
     if (nonFinite) *nonFinite = stats.nonFiniteDropped;
     return film;

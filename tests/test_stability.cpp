@@ -30,9 +30,7 @@ Film renderFilm(const Scene& scene, const Integrator& integrator, int w, int h, 
     Camera camera(*scene.camera, w, h);
     RenderContext ctx{scene, *accel, camera, /* maxDepth = */ -1};
     Film film(w, h);
-    RenderOptions opt;
-    opt.spp = spp;
-    opt.seed = seed;
+    RenderOptions opt{.spp = spp, .seed = seed};
     RenderStats stats = renderImage(ctx, integrator, film, opt);
     EXPECT_EQ(stats.nonFiniteDropped, 0u) << integrator.name();
     return film;

@@ -54,7 +54,7 @@ struct RenderOptions {
     /// Called with the film and the state to continue from after every complete pass
     /// (`interrupted` true when the render stops there), and once when the render stops in the
     /// middle of a pass, before that pass's splats are merged for the output image.
-    std::function<void(const Film& film, const RenderState& state, bool interrupted)> onPassEnd;
+    std::function<void(const Film& film, const RenderState& state, bool interrupted)> onPassEnd = {};
     /// Test hook: behave as if cancelled once this many tiles have been rendered (0: never).
     uint64_t stopAfterTiles = 0;
 };
