@@ -42,6 +42,12 @@ public:
     /// Closest hit with t in (ray.tMin, ray.tMax). Rays with a non-finite origin or direction, or a
     /// zero direction, never hit. Thread-safe.
     virtual bool intersect(const Ray& ray, Hit& hit) const = 0;
+    /// intersect() for a ray that closely follows the previous one this thread traced (camera rays
+    /// in pixel order): the same record, bit for bit, but a backend may run a kernel whose branches
+    /// pay off only when they predict well. Our BVH branches on the number of hit children for
+    /// such rays and orders them branch-free for all others; Embree gets
+    /// RTC_INTERSECT_CONTEXT_FLAG_COHERENT. Thread-safe.
+    virtual bool intersectCoherent(const Ray& ray, Hit& hit) const { return intersect(ray, hit); }
     /// Any hit with t in (ray.tMin, ray.tMax) (shadow rays). Thread-safe.
     virtual bool occluded(const Ray& ray) const = 0;
     virtual Bounds3f bounds() const = 0;

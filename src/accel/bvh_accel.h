@@ -18,6 +18,7 @@ public:
 
     std::string_view name() const override { return config_.spatialSplits ? "sbvh" : "bvh"; }
     bool intersect(const Ray& ray, Hit& hit) const override;
+    bool intersectCoherent(const Ray& ray, Hit& hit) const override;
     bool occluded(const Ray& ray) const override;
     Bounds3f bounds() const override { return bounds_; }
     AccelStats stats() const override { return stats_; }
@@ -60,12 +61,15 @@ public:
     static constexpr uint32_t kMixedBit = 0x40000000u;
 
 private:
-    template <bool kAvx> bool intersectImpl(const Ray& ray, Hit& hit) const;
+    /// kCoherent: the child-ordering path for rays whose branches predict well (intersectCoherent).
+    template <bool kAvx, bool kCoherent> bool intersectImpl(const Ray& ray, Hit& hit) const;
     template <bool kAvx> bool occludedImpl(const Ray& ray) const;
     bool intersectAvx2(const Ray& ray, Hit& hit) const;
+    bool intersectCoherentAvx2(const Ray& ray, Hit& hit) const;
     bool occludedAvx2(const Ray& ray) const;
 
     void prefetchChild(uint32_t ref) const;
+    void prefetchAny(uint32_t ref) const;
     /// The first Triangle4 block of a triangle leaf reference.
     const Triangle4* leafBlocks(uint32_t ref) const {
         return reinterpret_cast<const Triangle4*>(reinterpret_cast<const char*>(triangles_.data()) + size_t(ref & 0x3ffffffcu) * 4);

@@ -162,10 +162,17 @@ EmbreeAccel::~EmbreeAccel() {
     if (device_) rtcReleaseDevice(static_cast<RTCDevice>(device_));
 }
 
-bool EmbreeAccel::intersect(const Ray& ray, Hit& hit) const {
+bool EmbreeAccel::intersect(const Ray& ray, Hit& hit) const { return intersectWith(ray, hit, false); }
+
+bool EmbreeAccel::intersectCoherent(const Ray& ray, Hit& hit) const { return intersectWith(ray, hit, true); }
+
+bool EmbreeAccel::intersectWith(const Ray& ray, Hit& hit, bool coherent) const {
     if (!isTraceableRay(ray)) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
+    // Embree's own hint, given whenever the caller gives us ours (it documents the flag for ray
+    // streams; a single ray's kernel may ignore it).
+    if (coherent) context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     RTCRayHit rh;
     fillRay(ray, rh.ray);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;

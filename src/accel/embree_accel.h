@@ -17,11 +17,14 @@ public:
 
     std::string_view name() const override { return "embree"; }
     bool intersect(const Ray& ray, Hit& hit) const override;
+    bool intersectCoherent(const Ray& ray, Hit& hit) const override;
     bool occluded(const Ray& ray) const override;
     Bounds3f bounds() const override { return bounds_; }
     AccelStats stats() const override { return stats_; }
 
 private:
+    bool intersectWith(const Ray& ray, Hit& hit, bool coherent) const;
+
     const SceneGeometry& geometry_;
     void* device_ = nullptr;  // RTCDevice, kept opaque so embree headers stay out of this header
     void* scene_ = nullptr;   // RTCScene

@@ -4,6 +4,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <cstring>
+
 #include "core/error.h"
 #include "core/frame.h"
 #include "core/rng.h"
@@ -12,6 +14,19 @@
 
 namespace tessera {
 namespace {
+
+/// The same record bit for bit (intersectCoherent must return exactly what intersect does).
+bool sameRecord(bool hitA, const Hit& a, bool hitB, const Hit& b) {
+    if (hitA != hitB) return false;
+    if (!hitA) return true;
+    auto bits = [](float x) {
+        uint32_t u;
+        std::memcpy(&u, &x, 4);
+        return u;
+    };
+    return bits(a.t) == bits(b.t) && bits(a.u) == bits(b.u) && bits(a.v) == bits(b.v) && a.primId == b.primId &&
+           a.geomId == b.geomId && bits(a.ng.x) == bits(b.ng.x) && bits(a.ng.y) == bits(b.ng.y) && bits(a.ng.z) == bits(b.ng.z);
+}
 
 /// A scene box that is never empty or flat, so origins and cameras can be placed around it.
 Bounds3f usableBounds(const SceneGeometry& g) {
@@ -403,6 +418,9 @@ ValidationResult compareAccels(const Accel& test, const Accel& reference, const 
             std::string why;
             int verdict = classify(g, r, th, ht, rh, hr, tol, why);
             if (verdict != 2 && test.occluded(r) != th) verdict = 2, why = "occluded() disagrees with intersect()";
+            Hit hc;
+            bool ch = test.intersectCoherent(r, hc);
+            if (verdict != 2 && !sameRecord(th, ht, ch, hc)) verdict = 2, why = "intersectCoherent() disagrees with intersect()";
             ++res.rays;
             if (verdict == 0) ++res.agreements;
             else if (verdict == 1) ++res.ties;

@@ -82,20 +82,33 @@ RaySets makeRays(const SceneGeometry& g, const Accel& oracle, const std::optiona
     return sets;
 }
 
-/// Seconds to trace all rays (closest hit, or any hit for shadow rays); `checksum` keeps the work.
-double traceSeconds(const Accel& accel, const std::vector<Ray>& rays, bool anyHit, int threads, size_t& checksum) {
+/// The query a ray set is traced with: closest hit (primary rays through intersectCoherent, as
+/// the renderer traces its camera rays; diffuse rays through intersect) or any hit (shadow rays).
+enum class Query { ClosestCoherent, Closest, Any };
+
+inline bool trace(const Accel& accel, const Ray& r, Query q, Hit& h) {
+    switch (q) {
+    case Query::ClosestCoherent: return accel.intersectCoherent(r, h);
+    case Query::Closest: return accel.intersect(r, h);
+    case Query::Any: return accel.occluded(r);
+    }
+    return false;
+}
+
+/// Seconds to trace all rays; `checksum` keeps the work.
+double traceSeconds(const Accel& accel, const std::vector<Ray>& rays, Query query, int threads, size_t& checksum) {
     auto start = std::chrono::steady_clock::now();
     size_t hits = 0;
     if (threads == 1) {
         Hit h;
-        for (const Ray& r : rays) hits += anyHit ? accel.occluded(r) : accel.intersect(r, h);
+        for (const Ray& r : rays) hits += trace(accel, r, query, h);
     } else {
         std::atomic<size_t> total{0};
         auto body = [&] {
             tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
                 size_t local = 0;
                 Hit h;
-                for (size_t i = range.begin(); i != range.end(); ++i) local += anyHit ? accel.occluded(rays[i]) : accel.intersect(rays[i], h);
+                for (size_t i = range.begin(); i != range.end(); ++i) local += trace(accel, rays[i], query, h);
                 total += local;
             });
         };
@@ -219,7 +232,8 @@ Runner addBenchAccelCommand(CLI::App& app) {
                     buildSeconds[name].push_back(accel->stats().buildSeconds);
                     for (const std::string& kind : kinds) {
                         const std::vector<Ray>& set = rays.get(kind);
-                        double s = traceSeconds(*accel, set, kind == "shadow", opt->threads, checksum);
+                        Query query = kind == "shadow" ? Query::Any : kind == "primary" ? Query::ClosestCoherent : Query::Closest;
+                        double s = traceSeconds(*accel, set, query, opt->threads, checksum);
                         mrays[name][kind].push_back(double(set.size()) / s * 1e-6);
                     }
                 }

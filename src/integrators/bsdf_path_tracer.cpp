@@ -16,7 +16,8 @@ Rgb BsdfPathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
     float rrScale = 1.f;
     for (int depth = 0;; ++depth) {
         Hit hit;
-        if (!ctx.accel.intersect(ray, hit)) break;
+        // Camera rays follow their neighbours (tiles in pixel order): the coherent kernel.
+        if (!(depth == 0 ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) break;
         SurfaceInteraction si = scene.interaction(ray, hit);
         Vec3f wo = -glm::normalize(ray.d);
         if (si.lightIndex != kInvalidId) L += beta * scene.lights().emitted(si.lightIndex, si.ng, wo);

@@ -31,7 +31,8 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
 
     for (int depth = 0;; ++depth) {
         Hit hit;
-        if (!ctx.accel.intersect(ray, hit)) break;
+        // Camera rays follow their neighbours (tiles in pixel order): the coherent kernel.
+        if (!(depth == 0 ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) break;
         SurfaceInteraction si = scene.interaction(ray, hit);
         Vec3f wo = -glm::normalize(ray.d);
         SampleTrace* trace = ctx.trace;

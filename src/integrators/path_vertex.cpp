@@ -91,7 +91,9 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
     int limit = maxVertices < 0 ? kMaxSubpathVertices : std::min(maxVertices, kMaxSubpathVertices);
     while (int(out.size()) < limit) {
         Hit hit;
-        if (!ctx.accel.intersect(ray, hit)) break;
+        // The camera ray (a camera subpath's first segment) follows its neighbours: the coherent kernel.
+        bool cameraRay = mode == TransportMode::Radiance && out.size() == 1;
+        if (!(cameraRay ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) break;
         SurfaceInteraction si = scene.interaction(ray, hit);
         PathVertex v;
         v.type = VertexType::Surface;
