@@ -6,6 +6,7 @@
 #include <tbb/task_arena.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -99,6 +100,12 @@ void expectMatchesEmbree(const SceneGeometry& g, size_t raysPerKind, const std::
         EXPECT_EQ(r.rays, rays.size());
         EXPECT_EQ(r.errors, 0u) << what << ", " << toString(kind) << " rays: "
                                 << (r.examples.empty() ? std::string() : toJson(r).dump());
+        // The portable (SSE2) kernels too: on an AVX2 machine nothing else would run them.
+        bvh.forcePortableKernels();
+        ValidationResult p = compareAccels(bvh, *embree, g, rays, kind);
+        EXPECT_EQ(p.errors, 0u) << what << ", " << toString(kind) << " rays, portable kernels: "
+                                << (p.examples.empty() ? std::string() : toJson(p).dump());
+        bvh.allowAvx2Kernels();
     }
 }
 
@@ -250,6 +257,36 @@ TEST(Bvh, BuildIsIdenticalForAnyThreadCount) {
     EXPECT_EQ(one.structureHash(), two.structureHash());
     EXPECT_EQ(one.structureHash(), many.structureHash());
     EXPECT_EQ(one.checkInvariants(), "");
+}
+
+TEST(Bvh, PortableAndAvx2KernelsGiveIdenticalRecords) {
+    // The same arithmetic in both builds (no FMA contraction), so every record must be
+    // bit-identical, for all three queries, the coherent kernel included.
+    SceneGeometry g;
+    g.meshes.push_back(test::makeUvSphereMesh(Vec3f(0), 1.f, 40, 80, 0));
+    g.meshes.push_back(test::makeUvSphereMesh(Vec3f(0.5f, 0.2f, 0.1f), 0.6f, 30, 60, 0));
+    g.spheres.push_back({"ball", Vec3f(-0.7f, 0.4f, 0.3f), 0.5f, 0});
+    BvhAccel fast(g, AccelOptions{}), portable(g, AccelOptions{});
+    portable.forcePortableKernels();
+    EXPECT_EQ(portable.isa(), "sse2/portable");
+    auto embree = createAccel("embree", g);
+    size_t hits = 0;
+    auto same = [](bool ha, const Hit& a, bool hb, const Hit& b) {
+        return ha == hb && (!ha || (std::memcmp(&a.t, &b.t, 4) == 0 && std::memcmp(&a.u, &b.u, 4) == 0 &&
+                                    std::memcmp(&a.v, &b.v, 4) == 0 && a.geomId == b.geomId && a.primId == b.primId));
+    };
+    for (RayKind kind : kAllRayKinds)
+        for (const Ray& r : generateRays(g, *embree, kind, 2000, /*seed=*/5)) {
+            Hit a, b, c, d;
+            bool ha = fast.intersect(r, a), hb = portable.intersect(r, b);
+            bool hc = fast.intersectCoherent(r, c), hd = portable.intersectCoherent(r, d);
+            ASSERT_TRUE(same(ha, a, hb, b)) << toString(kind);
+            ASSERT_TRUE(same(ha, a, hc, c)) << toString(kind);
+            ASSERT_TRUE(same(ha, a, hd, d)) << toString(kind);
+            ASSERT_EQ(fast.occluded(r), portable.occluded(r));
+            hits += ha;
+        }
+    EXPECT_GT(hits, 2000u);
 }
 
 TEST(Bvh, DegenerateRaysAndClippedRanges) {

@@ -142,9 +142,7 @@ BvhAccel::BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, c
     : geometry_(geometry), config_(config) {
     auto start = std::chrono::steady_clock::now();
     bounds_ = geometry.bounds();
-#if defined(TESSERA_X86)
-    useAvx2_ = __builtin_cpu_supports("avx2");
-#endif
+    allowAvx2Kernels();
 
     // Primitive references, boxes and centroids: all the builder sees.
     std::vector<Bounds3f> primBounds;
@@ -346,6 +344,12 @@ TESSERA_INLINE void BvhAccel::prefetchChild(uint32_t ref) const {
 TESSERA_INLINE void BvhAccel::prefetchAny(uint32_t ref) const {
     const char* p = (ref & kLeafBit) ? reinterpret_cast<const char*>(leafBlocks(ref)) : reinterpret_cast<const char*>(&node(ref));
     for (int l = 0; l < 4; ++l) __builtin_prefetch(p + 64 * l);
+}
+
+void BvhAccel::allowAvx2Kernels() {
+#if defined(TESSERA_X86)
+    useAvx2_ = __builtin_cpu_supports("avx2");
+#endif
 }
 
 std::string_view BvhAccel::isa() const { return useAvx2_ ? "avx2" : "sse2/portable"; }

@@ -26,6 +26,9 @@ public:
     const BvhConfig& config() const { return config_; }
     /// Which traversal kernels run: "avx2" or "sse2/portable".
     std::string_view isa() const;
+    /// Runs the portable kernels even where AVX2 is available (tests compare the two), and back.
+    void forcePortableKernels() { useAvx2_ = false; }
+    void allowAvx2Kernels();
     /// Checks the tree: every primitive with finite bounds reachable exactly once, each child box
     /// inside its parent's box, every primitive inside its leaf's box (with spatial splits: reachable
     /// at least once, and meeting each leaf box that holds it). Returns "" or the first problem.
