@@ -30,10 +30,10 @@ bool BruteForceAccel::intersect(const Ray& rayIn, Hit& hit) const {
     for (uint32_t i = 0; i < geometry_.spheres.size(); ++i) {
         const Sphere& s = geometry_.spheres[i];
         double t = intersectSphere(s.center, s.radius, ray);
-        if (t < 0.0) continue;
+        // t < tMax in double may still round up to tMax: every backend then skips it.
+        if (t < 0.0 || !(float(t) < ray.tMax)) continue;
         ray.tMax = float(t);
-        Vec3f p = ray.o + float(t) * ray.d;
-        Vec3f n = glm::normalize(Vec3f(Vec3d(p) - Vec3d(s.center)));
+        Vec3f n = sphereHitNormal(s.center, ray, float(t));
         Vec2f uv = sphereUv(n);
         hit.t = float(t);
         hit.u = uv.x;
@@ -55,8 +55,10 @@ bool BruteForceAccel::occluded(const Ray& ray) const {
                 return true;
         }
     }
-    for (const Sphere& s : geometry_.spheres)
-        if (intersectSphere(s.center, s.radius, ray) >= 0.0) return true;
+    for (const Sphere& s : geometry_.spheres) {
+        double t = intersectSphere(s.center, s.radius, ray);
+        if (t >= 0.0 && float(t) < ray.tMax) return true;
+    }
     return false;
 }
 

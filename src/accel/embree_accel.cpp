@@ -52,8 +52,9 @@ void sphereIntersectFn(const RTCIntersectFunctionNArguments* args) {
         if (args->valid[i] != -1) continue;
         Ray r = rayFromEmbree(ray, args->N, i);
         double t = intersectSphere(s.center, s.radius, r);
-        if (t < 0.0) continue;
-        Vec3f n = glm::normalize(Vec3f(Vec3d(r.o) + t * Vec3d(r.d) - Vec3d(s.center)));
+        // t < tMax in double may still round up to tMax: every backend then skips it.
+        if (t < 0.0 || !(float(t) < r.tMax)) continue;
+        Vec3f n = sphereHitNormal(s.center, r, float(t));
         Vec2f uv = sphereUv(n);
         RTCRayN_tfar(ray, args->N, i) = float(t);
         RTCHitN_Ng_x(hit, args->N, i) = n.x;
@@ -72,7 +73,8 @@ void sphereOccludedFn(const RTCOccludedFunctionNArguments* args) {
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] != -1) continue;
         Ray r = rayFromEmbree(args->ray, args->N, i);
-        if (intersectSphere(s.center, s.radius, r) >= 0.0) RTCRayN_tfar(args->ray, args->N, i) = -kInfinity;
+        double t = intersectSphere(s.center, s.radius, r);
+        if (t >= 0.0 && float(t) < r.tMax) RTCRayN_tfar(args->ray, args->N, i) = -kInfinity;
     }
 }
 

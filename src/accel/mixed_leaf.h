@@ -54,8 +54,7 @@ inline void mixedHitRecord(const SceneGeometry& g, const Ray& ray, const MixedCa
     hit.primId = c.primId;
     if (c.geomId == g.sphereGeomId()) {
         const Sphere& s = g.spheres[c.primId];
-        // Same expressions as the Embree sphere callback and the brute-force backend.
-        Vec3f n = glm::normalize(Vec3f(Vec3d(ray.o) + double(t) * Vec3d(ray.d) - Vec3d(s.center)));
+        Vec3f n = sphereHitNormal(s.center, ray, t);
         Vec2f uv = sphereUv(n);
         hit.u = uv.x, hit.v = uv.y;
         hit.ng = n;

@@ -32,6 +32,13 @@ inline double intersectSphere(const Vec3f& centerF, float radiusF, const Ray& ra
     return -1.0;
 }
 
+/// Unit outward normal of a sphere hit at the distance `t` a hit record reports (already rounded to
+/// float), in double precision. One expression for every backend (brute force, the Embree
+/// callback, the BVH's and k-d tree's sphere leaves), so their records agree bit for bit.
+inline Vec3f sphereHitNormal(const Vec3f& center, const Ray& ray, float t) {
+    return glm::normalize(Vec3f(Vec3d(ray.o) + double(t) * Vec3d(ray.d) - Vec3d(center)));
+}
+
 /// Spherical (u, v) = (φ/2π, θ/π) of a unit direction from the sphere's centre; θ from +y.
 inline Vec2f sphereUv(const Vec3f& nUnit) {
     float phi = std::atan2(nUnit.z, nUnit.x);
