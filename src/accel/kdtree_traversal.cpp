@@ -6,6 +6,7 @@
 /// traversal's near-first order, the others pushed. The closest-hit kernel stops as soon as a hit
 /// lies inside the current leaf's segment (nothing behind can be closer); the any-hit kernel stops
 /// at the first hit.
+#include <array>
 #include <cmath>
 #include <cstring>
 
@@ -67,59 +68,130 @@ TESSERA_INLINE Vi8 permute8(Vi8 v, Vi8 idx) {
 #endif
 }
 
-// Slot s (lane s) applies, at level l, plane (1 << l) − 1 + (s >> (3 − l)) from the side given by
-// bit 2 − l of s (kdtree_wide.h).
+// Slot s (lane s) applies, at level l, plane p = (1 << l) − 1 + (s >> (3 − l)) from the side given
+// by bit 2 − l of s (kdtree_wide.h); the meta word holds that plane's axis in bits 2p..2p+1 and its
+// presence in bit 22 + p.
 const Vi8 kPlaneAxisShift = {0, 2, 4, 6, 8, 10, 12, 0};
+const Vi8 kMetaLane = {7, 7, 7, 7, 7, 7, 7, 7};
 const Vi8 kLevelPlane[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {1, 1, 1, 1, 2, 2, 2, 2}, {3, 3, 4, 4, 5, 5, 6, 6}};
+const Vi8 kLevelAxisShift[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {2, 2, 2, 2, 4, 4, 4, 4}, {6, 6, 8, 8, 10, 10, 12, 12}};
+const Vi8 kLevelPlaneToSign[3] = {{9, 9, 9, 9, 9, 9, 9, 9}, {8, 8, 8, 8, 7, 7, 7, 7}, {6, 6, 5, 5, 4, 4, 3, 3}};
 const Vi8 kLevelAbove[3] = {{0, 0, 0, 0, -1, -1, -1, -1}, {0, 0, -1, -1, 0, 0, -1, -1}, {0, -1, 0, -1, 0, -1, 0, -1}};
 const Vi8 kLaneIndex = {0, 1, 2, 3, 4, 5, 6, 7};
 
+/// All lanes x: one vbroadcastss in the AVX2 build (GCC turned both `Vf8{} + x`, an addition of 0
+/// in the latency chain, and `Vf8{x, x, ...}` into longer sequences).
+template <bool kAvx>
+TESSERA_INLINE Vf8 broadcast8(float x) {
+#if defined(TESSERA_X86)
+    if constexpr (kAvx) {
+        Vf8 r;
+        asm("vbroadcastss %1, %0" : "=x"(r) : "x"(x));
+        return r;
+    }
+#endif
+    return Vf8{x, x, x, x, x, x, x, x};
+}
+
+/// m ? a : b for lane masks m (all ones or zero), as three bit operations: a vector `?:` compiled to
+/// two compares normalising the mask, and a blend.
+TESSERA_INLINE Vf8 select8(Vi8 m, Vf8 a, Vf8 b) {
+    Vi8 ai, bi;
+    std::memcpy(&ai, &a, sizeof ai);
+    std::memcpy(&bi, &b, sizeof bi);
+    Vi8 r = (ai & m) | (bi & ~m);
+    Vf8 f;
+    std::memcpy(&f, &r, sizeof f);
+    return f;
+}
+
 /// Per-ray values of the wide-node test, lanes 0–2 per axis (lanes 3–7 unused).
 struct WideRay {
-    Vf8 org, inv, pad;  ///< origin, 1/d, the plane padding eps·|1/d| (0 where d = 0)
-    Vi8 down;           ///< all ones where the ray moves downward (from the sign of 1/d, so −0.0 too)
+    Vf8 org, inv;  ///< origin, 1/d
+    /// The origin moved by ∓eps along each axis (towards +d for orgLo): (split − orgLo)·(1/d) is
+    /// the plane distance padded by eps·|1/d| towards the origin, (split − orgHi)·(1/d) away from it.
+    /// Moving the origin instead of padding the distance puts the padded distances one subtraction
+    /// and one product from the node's load, like the exact one, instead of an addition later.
+    Vf8 orgLo, orgHi;
+    Vi8 downBits;  ///< all lanes: bit a set when the ray moves downward on axis a (sign of 1/d)
 };
 
 /// The slots of a wide node that the segment [tMin, tMax] enters, as a bit mask. For each slot
 /// (lane) and level, the plane distance t = (split − o[axis])·(1/d[axis]) (origin and 1/d permuted
-/// into the lanes by the plane's axis) bounds the segment from one side: a slot on the near side of
-/// the plane (below it for a ray moving up, above it for one moving down) keeps [−inf, t], one on
-/// the far side [t, +inf]; the slot's segment is the intersection (max of the entries, min of the
-/// exits). NaN distances (no plane at that level, or an origin in the plane of a zero direction
-/// component, which visits both sides) leave it unchanged: they are the first operand of the
-/// NaN-ignoring max/min. The visit decision uses the planes padded by eps·|1/d| (a cell is visited if
-/// the ray passes within eps of it, kdtree_traversal's robustness rule), the returned segments
-/// `entry`/`exit` are the exact ones (the early exit stays exact). Padding every level of the
-/// treelet against the exact segment from above it visits a superset of the binary traversal's
-/// cells. `key` is each slot's rank in the binary near-first order: bit 2 − l set when the slot lies
-/// on the far side of its level-l plane (distinct among the occupied slots, so a sort by key is the
-/// binary traversal's depth-first near-first order, also for padded or NaN decisions).
+/// into the plane lanes by the plane's axis, then the planes into the slot lanes by level) bounds
+/// the segment from one side: a slot on the near side of the plane (below it for a ray moving up,
+/// above it for one moving down) keeps [−inf, t], one on the far side [t, +inf]; the slot's segment
+/// is the intersection (max of the entries, min of the exits). Levels without a plane (the path
+/// ended in a leaf) contribute ±inf. The visit decision uses the planes moved by eps towards the
+/// slot (a cell is visited if the ray passes within eps of it: the robustness rule of the traversal
+/// below); the returned segments `entry`/`exit` are the exact ones, so the early exit stays exact.
+/// Padding every level of the treelet against the exact segment from above it visits a superset of
+/// the binary traversal's cells.
+/// NaN distances (an origin in the plane of a zero direction component, which must visit both
+/// sides) leave the exact segments unchanged: they are the first operand of the NaN-ignoring
+/// max/min, chained on a non-NaN accumulator. The padded bounds are reduced as a tree (shorter
+/// latency); a NaN there can only make a bound NaN, and the visit test `!(entry > exit)` then
+/// visits the slot: conservative.
+/// `key` is each slot's rank in the binary near-first order: bit 2 − l set when the slot lies on the
+/// far side of its level-l plane (distinct among the occupied slots, so a sort by key is the binary
+/// traversal's depth-first near-first order, also for padded or NaN decisions).
 template <bool kAvx>
 TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, float tMin, float tMax, Vf8& entry, Vf8& exit, Vi8& key) {
-    const Vf8 planes = load8(n.split);  // lane 7 holds the meta word (a normal float), never used
-    const Vi8 axis = ((Vi8{} + int32_t(n.meta)) >> kPlaneAxisShift) & 3;
-    const Vf8 o = permute8(r.org, axis), inv = permute8(r.inv, axis), pad = permute8(r.pad, axis);
-    const Vi8 down = permute8(r.down, axis);
-    const Vf8 t = (planes - o) * inv;
-    const Vf8 tLo = t - pad, tHi = t + pad;
-    const Vf8 inf = splat8(kInfinity), negInf = splat8(-kInfinity);
-    Vf8 e = splat8(tMin), x = splat8(tMax), ePad = e, xPad = x;
+    const Vf8 planes = load8(n.split);  // lane 7 holds the meta word (a normal float)
+    Vi8 planeBits;
+    std::memcpy(&planeBits, &planes, sizeof planeBits);
+    const Vi8 meta = permute8(planeBits, kMetaLane);
+    const Vi8 axis = (meta >> kPlaneAxisShift) & 3;
+    const Vf8 inv = permute8(r.inv, axis);
+    const Vf8 t = (planes - permute8(r.org, axis)) * inv;
+    const Vf8 tLo = (planes - permute8(r.orgLo, axis)) * inv, tHi = (planes - permute8(r.orgHi, axis)) * inv;
+    const Vf8 inf = broadcast8<kAvx>(kInfinity), negInf = broadcast8<kAvx>(-kInfinity);
+    const Vf8 tMinV = broadcast8<kAvx>(tMin), tMaxV = broadcast8<kAvx>(tMax);
+    Vf8 e = tMinV, x = tMaxV, ePad[3], xPad[3];
     Vi8 flip{};
     for (int l = 0; l < 3; ++l) {
+        // Masks from the meta word by shifts (no lane permutes: those share one port with the
+        // permutes of the distances below).
+        const Vi8 down = -((r.downBits >> ((meta >> kLevelAxisShift[l]) & 3)) & 1);
+        const Vi8 used = (meta << kLevelPlaneToSign[l]) >> 31;
+        const Vi8 far = down ^ kLevelAbove[l];
+        const Vi8 farUsed = far & used, nearUsed = ~far & used;
         const Vi8 idx = kLevelPlane[l];
-        const Vf8 tl = permute8(t, idx), lo = permute8(tLo, idx), hi = permute8(tHi, idx);
-        const Vi8 dl = permute8(down, idx);
-        const Vi8 far = dl ^ kLevelAbove[l];
-        e = maxNanB(far ? tl : negInf, e);
-        x = minNanB(far ? inf : tl, x);
-        ePad = maxNanB(far ? lo : negInf, ePad);
-        xPad = minNanB(far ? inf : hi, xPad);
-        flip |= dl & (4 >> l);
+        const Vf8 tl = permute8(t, idx);
+        e = maxNanB(select8(farUsed, tl, negInf), e);
+        x = minNanB(select8(nearUsed, tl, inf), x);
+        ePad[l] = select8(farUsed, permute8(tLo, idx), negInf);
+        xPad[l] = select8(nearUsed, permute8(tHi, idx), inf);
+        flip |= down & (4 >> l);
     }
     entry = e, exit = x;
     key = kLaneIndex ^ flip;
-    return moveMask8Isa<kAvx>(ePad <= xPad) & n.slotMask();
+    const Vf8 eP = maxNanB(maxNanB(ePad[0], ePad[1]), maxNanB(ePad[2], tMinV));
+    const Vf8 xP = minNanB(minNanB(xPad[0], xPad[1]), minNanB(xPad[2], tMaxV));
+    return ~moveMask8Isa<kAvx>(eP > xP) & n.slotMask();
 }
+
+/// For each 8-bit lane mask, its set lanes packed from the low nibble up (4 bits each): the
+/// permutation that moves the entered slots to the front of a vector.
+constexpr auto kCompactLanes = [] {
+    std::array<uint32_t, 256> t{};
+    for (uint32_t m = 0; m < 256; ++m) {
+        uint32_t packed = 0, n = 0;
+        for (uint32_t i = 0; i < 8; ++i)
+            if (m >> i & 1) packed |= i << (4 * n++);
+        t[m] = packed;
+    }
+    return t;
+}();
+const Vi8 kNibbleShift = {0, 4, 8, 12, 16, 20, 24, 28};
+
+TESSERA_INLINE Vi8 load8i(const uint32_t* p) {
+    Vi8 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+TESSERA_INLINE void store8(void* p, Vf8 v) { std::memcpy(p, &v, sizeof v); }
+TESSERA_INLINE void store8(void* p, Vi8 v) { std::memcpy(p, &v, sizeof v); }
 
 }  // namespace
 
@@ -142,9 +214,11 @@ TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
         upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
         wideRay.org[a] = ray.o[a];
         wideRay.inv[a] = invD[a];
-        wideRay.pad[a] = ray.d[a] != 0.f ? eps * std::abs(invD[a]) : 0.f;
-        wideRay.down[a] = upward[a] ? 0 : -1;
+        wideRay.orgLo[a] = upward[a] ? ray.o[a] + eps : ray.o[a] - eps;
+        wideRay.orgHi[a] = upward[a] ? ray.o[a] - eps : ray.o[a] + eps;
+        wideRay.downBits[0] |= upward[a] ? 0 : 1 << a;
     }
+    for (int i = 1; i < 8; ++i) wideRay.downBits[i] = wideRay.downBits[0];
 
     // Clip the ray to the root cell grown by eps: conservative slabs (Ize 2013), NaN-safe operand
     // order (a 0·inf NaN, from an origin on a slab plane of a zero direction component, leaves the
@@ -267,17 +341,86 @@ done:
     }
 }
 
+
+/// The any-hit kernel: no order among the entered slots, so a node's step needs no branch on how
+/// many it entered: all are pushed at once (compacted by a permutation from kCompactLanes, onto a
+/// stack of structure-of-arrays) and the top is popped.
+template <bool kAvx>
+TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
+    if (wide_.empty() || !isTraceableRay(ray)) return false;
+    Vec3f invD;
+    for (int a = 0; a < 3; ++a) invD[a] = 1.f / ray.d[a];  // ±inf for ±0.0
+    const float eps = 0x1p-19f * (sceneMagnitude_ + maxComponent(glm::abs(ray.o)));
+    bool upward[3];
+    WideRay wideRay{};
+    for (int a = 0; a < 3; ++a) {
+        upward[a] = !std::signbit(invD[a]);
+        wideRay.org[a] = ray.o[a];
+        wideRay.inv[a] = invD[a];
+        wideRay.orgLo[a] = upward[a] ? ray.o[a] + eps : ray.o[a] - eps;
+        wideRay.orgHi[a] = upward[a] ? ray.o[a] - eps : ray.o[a] + eps;
+        wideRay.downBits[0] |= upward[a] ? 0 : 1 << a;
+    }
+    for (int i = 1; i < 8; ++i) wideRay.downBits[i] = wideRay.downBits[0];
+    float tMin = ray.tMin, tMax = ray.tMax;
+    for (int a = 0; a < 3; ++a) {
+        float nearPlane = upward[a] ? rootCell_.lower[a] - eps : rootCell_.upper[a] + eps;
+        float farPlane = upward[a] ? rootCell_.upper[a] + eps : rootCell_.lower[a] - eps;
+        float tn = (nearPlane - ray.o[a]) * invD[a];
+        float tf = (farPlane - ray.o[a]) * twoUlpsLarger(invD[a]);
+        tMin = tn > tMin ? tn : tMin;
+        tMax = tf < tMax ? tf : tMax;
+    }
+    if (!(tMin <= tMax)) return false;
+    TriRay8 triRay(ray);
+    const float tHit = ray.tMax;
+
+    // 8 entries of slack: every push writes a whole vector.
+    alignas(32) uint32_t refs[kStackSize + 8];
+    alignas(32) float mins[kStackSize + 8], maxs[kStackSize + 8];
+    int sp = 0;
+    uint32_t ref = 0;
+    const char* wideBase = reinterpret_cast<const char*>(wide_.data());
+    while (true) {
+        if (!(ref & kKdLeafBit)) {
+            const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
+            Vf8 entry, exit;
+            Vi8 key;
+            uint32_t mask = enterSlots<kAvx>(node, wideRay, tMin, tMax, entry, exit, key);
+            const Vi8 order = ((Vi8{} + int32_t(kCompactLanes[mask])) >> kNibbleShift) & 7;
+            store8(refs + sp, permute8(load8i(node.child), order));
+            store8(mins + sp, permute8(entry, order));
+            store8(maxs + sp, permute8(exit, order));
+            sp += __builtin_popcount(mask);
+        } else {
+            const LeafSpan leaf = leafSpan(ref);
+            if (!leaf.mixed) {
+                const TriangleBlock* blocks = triangles_.data() + leaf.first;
+                for (uint32_t b = 0; b < leaf.count; ++b)
+                    if (intersectTriangles<8, true>(triRay, blocks[b].p, tHit).lane >= 0) return true;
+            } else {
+                MixedCandidate unused;
+                float t = tHit;
+                if (intersectMixedLeaf<true>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, t, unused)) return true;
+            }
+        }
+        if (sp == 0) return false;
+        --sp;
+        ref = refs[sp], tMin = mins[sp], tMax = maxs[sp];
+    }
+}
+
 #if defined(TESSERA_X86)
 __attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return traverse<false, true>(ray, &hit); }
-__attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return traverse<true, true>(ray, nullptr); }
+__attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<true>(ray); }
 #else
 bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return traverse<false, false>(ray, &hit); }
-bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return traverse<true, false>(ray, nullptr); }
+bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<false>(ray); }
 #endif
 
 bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const {
     return useAvx2_ ? intersectAvx2(ray, hit) : traverse<false, false>(ray, &hit);
 }
-bool KdTreeAccel::occluded(const Ray& ray) const { return useAvx2_ ? occludedAvx2(ray) : traverse<true, false>(ray, nullptr); }
+bool KdTreeAccel::occluded(const Ray& ray) const { return useAvx2_ ? occludedAvx2(ray) : occludedImpl<false>(ray); }
 
 }  // namespace tessera
