@@ -135,7 +135,7 @@ struct WideRay {
 /// `key` is each slot's rank in the binary near-first order: bit 2 − l set when the slot lies on the
 /// far side of its level-l plane (distinct among the occupied slots, so a sort by key is the binary
 /// traversal's depth-first near-first order, also for padded or NaN decisions).
-template <bool kAvx>
+template <bool kAvx, bool kExact = true>
 TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, float tMin, float tMax, Vf8& entry, Vf8& exit, Vi8& key) {
     const Vf8 planes = load8(n.split);  // lane 7 holds the meta word (a normal float)
     Vi8 planeBits;
@@ -157,17 +157,23 @@ TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, float 
         const Vi8 far = down ^ kLevelAbove[l];
         const Vi8 farUsed = far & used, nearUsed = ~far & used;
         const Vi8 idx = kLevelPlane[l];
-        const Vf8 tl = permute8(t, idx);
-        e = maxNanB(select8(farUsed, tl, negInf), e);
-        x = minNanB(select8(nearUsed, tl, inf), x);
+        if constexpr (kExact) {
+            const Vf8 tl = permute8(t, idx);
+            e = maxNanB(select8(farUsed, tl, negInf), e);
+            x = minNanB(select8(nearUsed, tl, inf), x);
+        }
         ePad[l] = select8(farUsed, permute8(tLo, idx), negInf);
         xPad[l] = select8(nearUsed, permute8(tHi, idx), inf);
         flip |= down & (4 >> l);
     }
-    entry = e, exit = x;
     key = kLaneIndex ^ flip;
     const Vf8 eP = maxNanB(maxNanB(ePad[0], ePad[1]), maxNanB(ePad[2], tMinV));
     const Vf8 xP = minNanB(minNanB(xPad[0], xPad[1]), minNanB(xPad[2], tMaxV));
+    if constexpr (kExact) {
+        entry = e, exit = x;
+    } else {
+        entry = eP, exit = xP;
+    }
     return ~moveMask8Isa<kAvx>(eP > xP) & n.slotMask();
 }
 
@@ -386,7 +392,7 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
             const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
             Vf8 entry, exit;
             Vi8 key;
-            uint32_t mask = enterSlots<kAvx>(node, wideRay, tMin, tMax, entry, exit, key);
+            uint32_t mask = enterSlots<kAvx, /*kExact=*/false>(node, wideRay, tMin, tMax, entry, exit, key);
             const Vi8 order = ((Vi8{} + int32_t(kCompactLanes[mask])) >> kNibbleShift) & 7;
             store8(refs + sp, permute8(load8i(node.child), order));
             store8(mins + sp, permute8(entry, order));
