@@ -69,15 +69,14 @@ TESSERA_INLINE Vi8 permute8(Vi8 v, Vi8 idx) {
 }
 
 // Slot s (lane s) applies, at level l, plane p = (1 << l) − 1 + (s >> (3 − l)) from the side given
-// by bit 2 − l of s (kdtree_wide.h); the meta word holds that plane's axis in bits 2p..2p+1 and its
-// presence in bit 22 + p.
-const Vi8 kPlaneAxisShift = {0, 2, 4, 6, 8, 10, 12, 0};
+// by bit 2 − l of s (kdtree_wide.h); the meta word holds that plane's axis in bits 2p..2p+1.
 const Vi8 kMetaLane = {7, 7, 7, 7, 7, 7, 7, 7};
 const Vi8 kLevelPlane[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {1, 1, 1, 1, 2, 2, 2, 2}, {3, 3, 4, 4, 5, 5, 6, 6}};
 const Vi8 kLevelAxisShift[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {2, 2, 2, 2, 4, 4, 4, 4}, {6, 6, 8, 8, 10, 10, 12, 12}};
-const Vi8 kLevelPlaneToSign[3] = {{9, 9, 9, 9, 9, 9, 9, 9}, {8, 8, 8, 8, 7, 7, 7, 7}, {6, 6, 5, 5, 4, 4, 3, 3}};
-const Vi8 kLevelAbove[3] = {{0, 0, 0, 0, -1, -1, -1, -1}, {0, 0, -1, -1, 0, 0, -1, -1}, {0, -1, 0, -1, 0, -1, 0, -1}};
-const Vi8 kLaneIndex = {0, 1, 2, 3, 4, 5, 6, 7};
+/// 4 where the slot lies above its level-l plane: the side half of a WideRay table index.
+const Vi8 kLevelSide[3] = {{0, 0, 0, 0, 4, 4, 4, 4}, {0, 0, 4, 4, 0, 0, 4, 4}, {0, 4, 0, 4, 0, 4, 0, 4}};
+const Vi8 kLevelKeyBit[3] = {{4, 4, 4, 4, 4, 4, 4, 4}, {2, 2, 2, 2, 2, 2, 2, 2}, {1, 1, 1, 1, 1, 1, 1, 1}};
+constexpr int32_t kQuietNaNBits = 0x7fc00000;
 
 /// All lanes x: one vbroadcastss in the AVX2 build (GCC turned both `Vf8{} + x`, an addition of 0
 /// in the latency chain, and `Vf8{x, x, ...}` into longer sequences).
@@ -93,88 +92,92 @@ TESSERA_INLINE Vf8 broadcast8(float x) {
     return Vf8{x, x, x, x, x, x, x, x};
 }
 
-/// m ? a : b for lane masks m (all ones or zero), as three bit operations: a vector `?:` compiled to
-/// two compares normalising the mask, and a blend.
-TESSERA_INLINE Vf8 select8(Vi8 m, Vf8 a, Vf8 b) {
-    Vi8 ai, bi;
-    std::memcpy(&ai, &a, sizeof ai);
-    std::memcpy(&bi, &b, sizeof bi);
-    Vi8 r = (ai & m) | (bi & ~m);
-    Vf8 f;
-    std::memcpy(&f, &r, sizeof f);
-    return f;
+/// x with the bits of m or'ed in: with m = kQuietNaNBits a NaN, with m = 0 x itself.
+TESSERA_INLINE Vf8 orBits(Vf8 x, Vi8 m) {
+    Vi8 xi;
+    std::memcpy(&xi, &x, sizeof xi);
+    xi |= m;
+    std::memcpy(&x, &xi, sizeof x);
+    return x;
 }
 
-/// Per-ray values of the wide-node test, lanes 0–2 per axis (lanes 3–7 unused).
+/// Per-ray tables of the wide-node test, indexed by axis + 4·side (side 1: the slot lies above the
+/// plane), permuted into the slot lanes by each level's (axis, side).
 struct WideRay {
-    Vf8 org, inv;  ///< origin, 1/d
-    /// The origin moved by ∓eps along each axis (towards +d for orgLo): (split − orgLo)·(1/d) is
-    /// the plane distance padded by eps·|1/d| towards the origin, (split − orgHi)·(1/d) away from it.
-    /// Moving the origin instead of padding the distance puts the padded distances one subtraction
-    /// and one product from the node's load, like the exact one, instead of an addition later.
-    Vf8 orgLo, orgHi;
-    Vi8 downBits;  ///< all lanes: bit a set when the ray moves downward on axis a (sign of 1/d)
+    Vf8 org, inv;  ///< origin, 1/d (the same for both sides)
+    /// The origin moved by eps along the axis so that (split − orgPad)·(1/d) is the plane distance
+    /// padded by eps·|1/d| in the direction that widens the slot's cell: towards the origin where
+    /// the plane is the slot's entry (slot on the far side), away from it where it is the exit.
+    /// Moving the origin instead of padding the distance costs nothing per node.
+    Vf8 orgPad;
+    /// kQuietNaNBits where the slot lies on the near side of the plane (the plane bounds its exit),
+    /// 0 on the far side (the plane bounds its entry). Or'ed into a distance it turns the bound that
+    /// does not apply into a NaN, which the NaN-ignoring max/min skip.
+    Vi8 nearNaN;
+
+    /// eps: the traversal's padding; upward[a]: the ray moves up on axis a (from the sign of 1/d).
+    WideRay(const Ray& ray, const Vec3f& invD, const bool (&upward)[3], float eps) : org{}, inv{}, orgPad{}, nearNaN{} {
+        for (int side = 0; side < 2; ++side)
+            for (int a = 0; a < 3; ++a) {
+                int i = a + 4 * side;
+                // Below the plane is the near side of a ray moving up.
+                bool near = side == 0 ? upward[a] : !upward[a];
+                org[i] = ray.o[a];
+                inv[i] = invD[a];
+                // Far side: entry t − eps·|1/d| = (split − (o + eps·sign d))/d; near side: exit t + eps·|1/d|.
+                orgPad[i] = (near == upward[a]) ? ray.o[a] - eps : ray.o[a] + eps;
+                nearNaN[i] = near ? kQuietNaNBits : 0;
+            }
+    }
 };
 
 /// The slots of a wide node that the segment [tMin, tMax] enters, as a bit mask. For each slot
-/// (lane) and level, the plane distance t = (split − o[axis])·(1/d[axis]) (origin and 1/d permuted
-/// into the plane lanes by the plane's axis, then the planes into the slot lanes by level) bounds
-/// the segment from one side: a slot on the near side of the plane (below it for a ray moving up,
-/// above it for one moving down) keeps [−inf, t], one on the far side [t, +inf]; the slot's segment
-/// is the intersection (max of the entries, min of the exits). Levels without a plane (the path
-/// ended in a leaf) contribute ±inf. The visit decision uses the planes moved by eps towards the
-/// slot (a cell is visited if the ray passes within eps of it: the robustness rule of the traversal
-/// below); the returned segments `entry`/`exit` are the exact ones, so the early exit stays exact.
-/// Padding every level of the treelet against the exact segment from above it visits a superset of
-/// the binary traversal's cells.
-/// NaN distances (an origin in the plane of a zero direction component, which must visit both
-/// sides) leave the exact segments unchanged: they are the first operand of the NaN-ignoring
-/// max/min, chained on a non-NaN accumulator. The padded bounds are reduced as a tree (shorter
-/// latency); a NaN there can only make a bound NaN, and the visit test `!(entry > exit)` then
-/// visits the slot: conservative.
-/// `key` is each slot's rank in the binary near-first order: bit 2 − l set when the slot lies on the
-/// far side of its level-l plane (distinct among the occupied slots, so a sort by key is the binary
-/// traversal's depth-first near-first order, also for padded or NaN decisions).
-template <bool kAvx, bool kExact = true>
+/// (lane) and level, the plane distance t = (split − o[axis])·(1/d[axis]) (the split permuted into
+/// the slot lanes by level, origin and 1/d by the plane's axis and the slot's side) bounds the
+/// segment from one side: a slot on the near side of the plane (below it for a ray moving up, above
+/// it for one moving down) keeps [−inf, t], one on the far side [t, +inf]; the slot's segment is the
+/// intersection (max of the entries, min of the exits). The bound that does not apply is made a NaN
+/// and skipped by the NaN-ignoring max/min (the first operand, chained on a non-NaN accumulator);
+/// so is a level without a plane (NaN split) and the 0·inf of an origin in the plane of a zero
+/// direction component (both sides visited, as in the binary traversal).
+/// The visit decision uses the planes moved by eps to widen each slot's cell (a cell is visited if
+/// the ray passes within eps of it: the robustness rule of the traversal below). With `kExact`,
+/// `entry`/`exit` are the exact segments, so that the closest-hit kernel's early exit stays exact
+/// (padding every level of the treelet against the exact segment from above it visits a superset of
+/// the binary traversal's cells); without, they are the padded ones (any-hit: conservative, and a
+/// third fewer instructions per node). `key` (kExact only) is each slot's rank in the binary
+/// near-first order: bit 2 − l set when the slot lies on the far side of its level-l plane (distinct
+/// among the occupied slots, so a sort by key is the binary traversal's depth-first near-first order,
+/// also for padded or NaN decisions).
+template <bool kAvx, bool kExact>
 TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, float tMin, float tMax, Vf8& entry, Vf8& exit, Vi8& key) {
-    const Vf8 planes = load8(n.split);  // lane 7 holds the meta word (a normal float)
+    const Vf8 planes = load8(n.split);  // lane 7 holds the meta word (a normal float), never used
     Vi8 planeBits;
     std::memcpy(&planeBits, &planes, sizeof planeBits);
     const Vi8 meta = permute8(planeBits, kMetaLane);
-    const Vi8 axis = (meta >> kPlaneAxisShift) & 3;
-    const Vf8 inv = permute8(r.inv, axis);
-    const Vf8 t = (planes - permute8(r.org, axis)) * inv;
-    const Vf8 tLo = (planes - permute8(r.orgLo, axis)) * inv, tHi = (planes - permute8(r.orgHi, axis)) * inv;
-    const Vf8 inf = broadcast8<kAvx>(kInfinity), negInf = broadcast8<kAvx>(-kInfinity);
     const Vf8 tMinV = broadcast8<kAvx>(tMin), tMaxV = broadcast8<kAvx>(tMax);
-    Vf8 e = tMinV, x = tMaxV, ePad[3], xPad[3];
-    Vi8 flip{};
+    Vf8 e = tMinV, x = tMaxV, eP = tMinV, xP = tMaxV;
+    Vi8 k{};
     for (int l = 0; l < 3; ++l) {
-        // Masks from the meta word by shifts (no lane permutes: those share one port with the
-        // permutes of the distances below).
-        const Vi8 down = -((r.downBits >> ((meta >> kLevelAxisShift[l]) & 3)) & 1);
-        const Vi8 used = (meta << kLevelPlaneToSign[l]) >> 31;
-        const Vi8 far = down ^ kLevelAbove[l];
-        const Vi8 farUsed = far & used, nearUsed = ~far & used;
-        const Vi8 idx = kLevelPlane[l];
+        const Vi8 index = ((meta >> kLevelAxisShift[l]) & 3) | kLevelSide[l];
+        const Vf8 split = permute8(planes, kLevelPlane[l]), inv = permute8(r.inv, index);
+        const Vi8 nearNaN = permute8(r.nearNaN, index), farNaN = nearNaN ^ kQuietNaNBits;
+        const Vf8 tPad = (split - permute8(r.orgPad, index)) * inv;
+        eP = maxNanB(orBits(tPad, nearNaN), eP);
+        xP = minNanB(orBits(tPad, farNaN), xP);
         if constexpr (kExact) {
-            const Vf8 tl = permute8(t, idx);
-            e = maxNanB(select8(farUsed, tl, negInf), e);
-            x = minNanB(select8(nearUsed, tl, inf), x);
+            const Vf8 t = (split - permute8(r.org, index)) * inv;
+            e = maxNanB(orBits(t, nearNaN), e);
+            x = minNanB(orBits(t, farNaN), x);
+            k |= (farNaN >> 22) & kLevelKeyBit[l];  // 0x1ff where far
         }
-        ePad[l] = select8(farUsed, permute8(tLo, idx), negInf);
-        xPad[l] = select8(nearUsed, permute8(tHi, idx), inf);
-        flip |= down & (4 >> l);
     }
-    key = kLaneIndex ^ flip;
-    const Vf8 eP = maxNanB(maxNanB(ePad[0], ePad[1]), maxNanB(ePad[2], tMinV));
-    const Vf8 xP = minNanB(minNanB(xPad[0], xPad[1]), minNanB(xPad[2], tMaxV));
     if constexpr (kExact) {
-        entry = e, exit = x;
+        entry = e, exit = x, key = k;
     } else {
         entry = eP, exit = xP;
     }
-    return ~moveMask8Isa<kAvx>(eP > xP) & n.slotMask();
+    return moveMask8Isa<kAvx>(eP <= xP) & n.slotMask();
 }
 
 /// For each 8-bit lane mask, its set lanes packed from the low nibble up (4 bits each): the
@@ -215,16 +218,8 @@ TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
     // visit decision. Segment bounds stay unpadded, so the early exit stays exact.
     const float eps = 0x1p-19f * (sceneMagnitude_ + maxComponent(glm::abs(ray.o)));
     bool upward[3];
-    WideRay wideRay{};
-    for (int a = 0; a < 3; ++a) {
-        upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
-        wideRay.org[a] = ray.o[a];
-        wideRay.inv[a] = invD[a];
-        wideRay.orgLo[a] = upward[a] ? ray.o[a] + eps : ray.o[a] - eps;
-        wideRay.orgHi[a] = upward[a] ? ray.o[a] - eps : ray.o[a] + eps;
-        wideRay.downBits[0] |= upward[a] ? 0 : 1 << a;
-    }
-    for (int i = 1; i < 8; ++i) wideRay.downBits[i] = wideRay.downBits[0];
+    for (int a = 0; a < 3; ++a) upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
+    const WideRay wideRay(ray, invD, upward, eps);
 
     // Clip the ray to the root cell grown by eps: conservative slabs (Ize 2013), NaN-safe operand
     // order (a 0·inf NaN, from an origin on a slab plane of a zero direction component, leaves the
@@ -256,7 +251,7 @@ TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
             const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
             Vf8 entry, exit;
             Vi8 key;
-            uint32_t mask = enterSlots<kAvx>(node, wideRay, tMin, tMax, entry, exit, key);
+            uint32_t mask = enterSlots<kAvx, /*kExact=*/true>(node, wideRay, tMin, tMax, entry, exit, key);
             if (mask) {
                 if (!(mask & (mask - 1))) {  // one slot: no ordering needed
                     int i = __builtin_ctz(mask);
@@ -358,16 +353,8 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
     for (int a = 0; a < 3; ++a) invD[a] = 1.f / ray.d[a];  // ±inf for ±0.0
     const float eps = 0x1p-19f * (sceneMagnitude_ + maxComponent(glm::abs(ray.o)));
     bool upward[3];
-    WideRay wideRay{};
-    for (int a = 0; a < 3; ++a) {
-        upward[a] = !std::signbit(invD[a]);
-        wideRay.org[a] = ray.o[a];
-        wideRay.inv[a] = invD[a];
-        wideRay.orgLo[a] = upward[a] ? ray.o[a] + eps : ray.o[a] - eps;
-        wideRay.orgHi[a] = upward[a] ? ray.o[a] - eps : ray.o[a] + eps;
-        wideRay.downBits[0] |= upward[a] ? 0 : 1 << a;
-    }
-    for (int i = 1; i < 8; ++i) wideRay.downBits[i] = wideRay.downBits[0];
+    for (int a = 0; a < 3; ++a) upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
+    const WideRay wideRay(ray, invD, upward, eps);
     float tMin = ray.tMin, tMax = ray.tMax;
     for (int a = 0; a < 3; ++a) {
         float nearPlane = upward[a] ? rootCell_.lower[a] - eps : rootCell_.upper[a] + eps;
