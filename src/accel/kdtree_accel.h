@@ -74,7 +74,7 @@ private:
         KdLeafRecord rec = leafTable_[first];
         return {rec.first, rec.payload >> 1, bool(rec.payload & kMixedFlag)};
     }
-    template <bool kAnyHit, bool kAvx> bool traverse(const Ray& ray, Hit* hit) const;
+    template <bool kAvx> bool intersectImpl(const Ray& ray, Hit& hit) const;
     template <bool kAvx> bool occludedImpl(const Ray& ray) const;
     // The same traversal compiled for AVX2 (one instruction per 8-lane leaf step); chosen at run
     // time, so the default build needs no -march=native.

@@ -36,16 +36,10 @@ inline float twoUlpsLarger(float x) {
 /// t + 4 ulps, for comparisons of two computed distances along the same ray.
 inline float padUp(float t) { return t + std::abs(t) * 0x1p-21f; }
 
-struct StackEntry {
-    uint32_t ref;
-    float tMin, tMax;
-};
-
 /// A wide node's (and the traversal's) depth is a third of the binary depth; each level pushes at
 /// most 7 entries.
 constexpr int kStackSize = 7 * (kKdMaxDepth / 3 + 1) + 1;
 
-using Candidate = TriangleCandidate;
 
 /// Lane i takes lane idx[i] (vpermps / vpermd inside the AVX2 build; GCC lowers it lane by lane
 /// elsewhere, with the same bits).
@@ -101,6 +95,12 @@ TESSERA_INLINE Vf8 orBits(Vf8 x, Vi8 m) {
     return x;
 }
 
+/// The part of the ray inside a cell: exact bounds (closest-hit kernel: early exit, order) and the
+/// bounds padded by eps at every plane (visit decisions).
+struct Segment {
+    float tMin, tMax, tMinPad, tMaxPad;
+};
+
 /// Per-ray tables of the wide-node test, indexed by axis + 4·side (side 1: the slot lies above the
 /// plane), permuted into the slot lanes by each level's (axis, side).
 struct WideRay {
@@ -116,6 +116,7 @@ struct WideRay {
     Vi8 nearNaN;
 
     /// eps: the traversal's padding; upward[a]: the ray moves up on axis a (from the sign of 1/d).
+    WideRay() = default;
     WideRay(const Ray& ray, const Vec3f& invD, const bool (&upward)[3], float eps) : org{}, inv{}, orgPad{}, nearNaN{} {
         for (int side = 0; side < 2; ++side)
             for (int a = 0; a < 3; ++a) {
@@ -141,22 +142,26 @@ struct WideRay {
 /// so is a level without a plane (NaN split) and the 0·inf of an origin in the plane of a zero
 /// direction component (both sides visited, as in the binary traversal).
 /// The visit decision uses the planes moved by eps to widen each slot's cell (a cell is visited if
-/// the ray passes within eps of it: the robustness rule of the traversal below). With `kExact`,
-/// `entry`/`exit` are the exact segments, so that the closest-hit kernel's early exit stays exact
-/// (padding every level of the treelet against the exact segment from above it visits a superset of
-/// the binary traversal's cells); without, they are the padded ones (any-hit: conservative, and a
-/// third fewer instructions per node). `key` (kExact only) is each slot's rank in the binary
+/// the ray passes within eps of it: the robustness rule of the traversal below), intersected with
+/// the padded segment from above (`entryPad`/`exitPad` carry it down). Every pair of planes on the
+/// path is then compared padded against padded, which visits a superset of the binary traversal's
+/// cells (that compared each padded plane with the exact bounds of the planes above it). Comparing
+/// against the exact segment instead is not: a cell visited only thanks to the padding has an
+/// inverted exact segment, and none of its children would pass. With `kExact`, `entry`/`exit`
+/// are also the exact segments, for the closest-hit kernel's early exit and near-first order;
+/// the any-hit kernel needs neither (a third fewer instructions per node). `key` (kExact only) is each slot's rank in the binary
 /// near-first order: bit 2 − l set when the slot lies on the far side of its level-l plane (distinct
 /// among the occupied slots, so a sort by key is the binary traversal's depth-first near-first order,
 /// also for padded or NaN decisions).
 template <bool kAvx, bool kExact>
-TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, float tMin, float tMax, Vf8& entry, Vf8& exit, Vi8& key) {
+TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const Segment& seg, Vf8& entry, Vf8& exit,
+                                   Vf8& entryPad, Vf8& exitPad, Vi8& key) {
     const Vf8 planes = load8(n.split);  // lane 7 holds the meta word (a normal float), never used
     Vi8 planeBits;
     std::memcpy(&planeBits, &planes, sizeof planeBits);
     const Vi8 meta = permute8(planeBits, kMetaLane);
-    const Vf8 tMinV = broadcast8<kAvx>(tMin), tMaxV = broadcast8<kAvx>(tMax);
-    Vf8 e = tMinV, x = tMaxV, eP = tMinV, xP = tMaxV;
+    Vf8 e{}, x{}, eP = broadcast8<kAvx>(seg.tMinPad), xP = broadcast8<kAvx>(seg.tMaxPad);
+    if constexpr (kExact) e = broadcast8<kAvx>(seg.tMin), x = broadcast8<kAvx>(seg.tMax);
     Vi8 k{};
     for (int l = 0; l < 3; ++l) {
         const Vi8 index = ((meta >> kLevelAxisShift[l]) & 3) | kLevelSide[l];
@@ -172,11 +177,8 @@ TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, float 
             k |= (farNaN >> 22) & kLevelKeyBit[l];  // 0x1ff where far
         }
     }
-    if constexpr (kExact) {
-        entry = e, exit = x, key = k;
-    } else {
-        entry = eP, exit = xP;
-    }
+    entry = e, exit = x, key = k;
+    entryPad = eP, exitPad = xP;
     return moveMask8Isa<kAvx>(eP <= xP) & n.slotMask();
 }
 
@@ -202,25 +204,23 @@ TESSERA_INLINE Vi8 load8i(const uint32_t* p) {
 TESSERA_INLINE void store8(void* p, Vf8 v) { std::memcpy(p, &v, sizeof v); }
 TESSERA_INLINE void store8(void* p, Vi8 v) { std::memcpy(p, &v, sizeof v); }
 
-}  // namespace
-
-template <bool kAnyHit, bool kAvx>
-TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
-    if (wide_.empty() || !isTraceableRay(ray)) return false;
+/// Per-ray set-up shared by both kernels: the wide-node tables and the ray clipped to the root cell.
+/// Returns false when the ray misses the root cell (or cannot be traced). `sceneMagnitude`: the
+/// largest |coordinate| of the root cell.
+TESSERA_INLINE bool startRay(const Ray& ray, const Bounds3f& rootCell_, float sceneMagnitude_, WideRay& wideRay, Segment& seg) {
+    if (!isTraceableRay(ray)) return false;
     Vec3f invD;
     for (int a = 0; a < 3; ++a) invD[a] = 1.f / ray.d[a];  // ±inf for ±0.0
-
     // Robustness. Primitive boxes and perfect splits are exact, but the watertight test may report
     // a hit up to a few ulps of the coordinates' magnitude (relative to the ray origin) outside the
     // exact triangle. So the traversal visits every cell that the ray passes within `eps` of:
     // 16 ulps of the largest coordinate involved. Across a plane of axis a that is a distance of
     // eps·|1/d_a| along the ray (large for rays almost parallel to the plane), which pads each
-    // visit decision. Segment bounds stay unpadded, so the early exit stays exact.
+    // visit decision. Exact segment bounds are kept beside, so the early exit stays exact.
     const float eps = 0x1p-19f * (sceneMagnitude_ + maxComponent(glm::abs(ray.o)));
     bool upward[3];
     for (int a = 0; a < 3; ++a) upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
-    const WideRay wideRay(ray, invD, upward, eps);
-
+    wideRay = WideRay(ray, invD, upward, eps);
     // Clip the ray to the root cell grown by eps: conservative slabs (Ize 2013), NaN-safe operand
     // order (a 0·inf NaN, from an origin on a slab plane of a zero direction component, leaves the
     // interval alone).
@@ -233,15 +233,30 @@ TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
         tMin = tn > tMin ? tn : tMin;
         tMax = tf < tMax ? tf : tMax;
     }
-    if (!(tMin <= tMax)) return false;
+    seg = {tMin, tMax, tMin, tMax};
+    return tMin <= tMax;
+}
 
+}  // namespace
+
+/// The closest-hit kernel: entered slots visited in the binary traversal's near-first order, the
+/// others pushed; stops when a hit lies inside the current leaf's exact segment.
+template <bool kAvx>
+TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
+    WideRay wideRay;
+    Segment seg;
+    if (wide_.empty() || !startRay(ray, rootCell_, sceneMagnitude_, wideRay, seg)) return false;
     TriRay8 triRay(ray);
-    float tHit = ray.tMax;  // closest hit so far (closest-hit kernel)
+    float tHit = ray.tMax;  // closest hit so far
     const TriangleBlock* bestBlock = nullptr;
     int bestLane = -1;
     MixedCandidate bestMixed;
     float bestU = 0.f, bestV = 0.f;
 
+    struct StackEntry {
+        uint32_t ref;
+        Segment seg;
+    };
     StackEntry stack[kStackSize];
     int sp = 0;
     uint32_t ref = 0;  // the root wide node
@@ -249,26 +264,13 @@ TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
     while (true) {
         if (!(ref & kKdLeafBit)) {
             const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
-            Vf8 entry, exit;
+            Vf8 entry, exit, entryPad, exitPad;
             Vi8 key;
-            uint32_t mask = enterSlots<kAvx, /*kExact=*/true>(node, wideRay, tMin, tMax, entry, exit, key);
+            uint32_t mask = enterSlots<kAvx, /*kExact=*/true>(node, wideRay, seg, entry, exit, entryPad, exitPad, key);
             if (mask) {
+                int nearest;
                 if (!(mask & (mask - 1))) {  // one slot: no ordering needed
-                    int i = __builtin_ctz(mask);
-                    ref = node.child[i], tMin = entry[i], tMax = exit[i];
-                    continue;
-                }
-                if constexpr (kAnyHit) {
-                    // No ordering for any-hit queries: push all but one.
-                    int first = __builtin_ctz(mask);
-                    mask &= mask - 1;
-                    while (mask) {
-                        int i = __builtin_ctz(mask);
-                        mask &= mask - 1;
-                        stack[sp++] = {node.child[i], entry[i], exit[i]};
-                    }
-                    ref = node.child[first], tMin = entry[first], tMax = exit[first];
-                    continue;
+                    nearest = __builtin_ctz(mask);
                 } else {
                     // Near-first: the slots by key (distinct, < 8), the farthest pushed first.
                     int32_t keys[8];
@@ -281,90 +283,69 @@ TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
                         slotOfKey[keys[i]] = i;
                         byKey |= 1u << keys[i];
                     }
-                    const int nearest = slotOfKey[__builtin_ctz(byKey)];
+                    nearest = slotOfKey[__builtin_ctz(byKey)];
                     byKey &= byKey - 1;
                     while (byKey) {
                         int k = 31 - __builtin_clz(byKey);
                         byKey ^= 1u << k;
                         int i = slotOfKey[k];
-                        stack[sp++] = {node.child[i], entry[i], exit[i]};
+                        stack[sp++] = {node.child[i], {entry[i], exit[i], entryPad[i], exitPad[i]}};
                     }
-                    ref = node.child[nearest], tMin = entry[nearest], tMax = exit[nearest];
-                    continue;
                 }
+                ref = node.child[nearest];
+                seg = {entry[nearest], exit[nearest], entryPad[nearest], exitPad[nearest]};
+                continue;
             }
         } else {
             const LeafSpan leaf = leafSpan(ref);
             if (!leaf.mixed) {
                 const TriangleBlock* blocks = triangles_.data() + leaf.first;
                 for (uint32_t b = 0; b < leaf.count; ++b) {
-                    Candidate c = intersectTriangles<8, kAnyHit>(triRay, blocks[b].p, tHit);
+                    TriangleCandidate c = intersectTriangles<8, false>(triRay, blocks[b].p, tHit);
                     if (c.lane < 0) continue;
-                    if constexpr (kAnyHit) return true;
                     tHit = c.t, bestU = c.u, bestV = c.v;
                     bestBlock = &blocks[b], bestLane = c.lane;
                 }
-            } else if (intersectMixedLeaf<kAnyHit>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, tHit, bestMixed)) {
-                if constexpr (kAnyHit) return true;
+            } else if (intersectMixedLeaf<false>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, tHit, bestMixed)) {
                 bestBlock = nullptr;
             }
             // Early exit: a hit inside this leaf's segment is closer than anything behind it.
-            if (tHit <= tMax && tHit < ray.tMax) break;
+            if (tHit <= seg.tMax && tHit < ray.tMax) break;
         }
         // Next segment along the ray, unless the closest hit lies before it.
         do {
             if (sp == 0) goto done;
             --sp;
-        } while (stack[sp].tMin > padUp(tHit));
+        } while (stack[sp].seg.tMin > padUp(tHit));
         ref = stack[sp].ref;
-        tMin = stack[sp].tMin;
-        tMax = stack[sp].tMax;
+        seg = stack[sp].seg;
     }
 done:
-    if constexpr (kAnyHit) {
-        return false;
-    } else {
-        if (bestBlock) {
-            Vec3f p[3];
-            for (int v = 0; v < 3; ++v) p[v] = {bestBlock->p[v][0][bestLane], bestBlock->p[v][1][bestLane], bestBlock->p[v][2][bestLane]};
-            hit->t = tHit, hit->u = bestU, hit->v = bestV;
-            const PrimRef& id = blockIds_[size_t(bestBlock - triangles_.data()) * kLanes + size_t(bestLane)];
-            hit->geomId = id.geomId;
-            hit->primId = id.primId;
-            hit->ng = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
-            return true;
-        }
-        if (bestMixed.geomId != kInvalidId) {
-            mixedHitRecord(geometry_, ray, bestMixed, tHit, *hit);
-            return true;
-        }
-        return false;
+    if (bestBlock) {
+        Vec3f p[3];
+        for (int v = 0; v < 3; ++v) p[v] = {bestBlock->p[v][0][bestLane], bestBlock->p[v][1][bestLane], bestBlock->p[v][2][bestLane]};
+        hit.t = tHit, hit.u = bestU, hit.v = bestV;
+        const PrimRef& id = blockIds_[size_t(bestBlock - triangles_.data()) * kLanes + size_t(bestLane)];
+        hit.geomId = id.geomId;
+        hit.primId = id.primId;
+        hit.ng = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
+        return true;
     }
+    if (bestMixed.geomId != kInvalidId) {
+        mixedHitRecord(geometry_, ray, bestMixed, tHit, hit);
+        return true;
+    }
+    return false;
 }
-
 
 /// The any-hit kernel: no order among the entered slots, so a node's step needs no branch on how
 /// many it entered: all are pushed at once (compacted by a permutation from kCompactLanes, onto a
-/// stack of structure-of-arrays) and the top is popped.
+/// stack of structure-of-arrays) and the top is popped. Only padded segments are carried.
 template <bool kAvx>
 TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
-    if (wide_.empty() || !isTraceableRay(ray)) return false;
-    Vec3f invD;
-    for (int a = 0; a < 3; ++a) invD[a] = 1.f / ray.d[a];  // ±inf for ±0.0
-    const float eps = 0x1p-19f * (sceneMagnitude_ + maxComponent(glm::abs(ray.o)));
-    bool upward[3];
-    for (int a = 0; a < 3; ++a) upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
-    const WideRay wideRay(ray, invD, upward, eps);
-    float tMin = ray.tMin, tMax = ray.tMax;
-    for (int a = 0; a < 3; ++a) {
-        float nearPlane = upward[a] ? rootCell_.lower[a] - eps : rootCell_.upper[a] + eps;
-        float farPlane = upward[a] ? rootCell_.upper[a] + eps : rootCell_.lower[a] - eps;
-        float tn = (nearPlane - ray.o[a]) * invD[a];
-        float tf = (farPlane - ray.o[a]) * twoUlpsLarger(invD[a]);
-        tMin = tn > tMin ? tn : tMin;
-        tMax = tf < tMax ? tf : tMax;
-    }
-    if (!(tMin <= tMax)) return false;
+    WideRay wideRay;
+    Segment seg;
+    if (wide_.empty() || !startRay(ray, rootCell_, sceneMagnitude_, wideRay, seg)) return false;
     TriRay8 triRay(ray);
     const float tHit = ray.tMax;
 
@@ -377,13 +358,13 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
     while (true) {
         if (!(ref & kKdLeafBit)) {
             const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
-            Vf8 entry, exit;
-            Vi8 key;
-            uint32_t mask = enterSlots<kAvx, /*kExact=*/false>(node, wideRay, tMin, tMax, entry, exit, key);
+            Vf8 unusedEntry, unusedExit, entryPad, exitPad;
+            Vi8 unusedKey;
+            uint32_t mask = enterSlots<kAvx, /*kExact=*/false>(node, wideRay, seg, unusedEntry, unusedExit, entryPad, exitPad, unusedKey);
             const Vi8 order = ((Vi8{} + int32_t(kCompactLanes[mask])) >> kNibbleShift) & 7;
             store8(refs + sp, permute8(load8i(node.child), order));
-            store8(mins + sp, permute8(entry, order));
-            store8(maxs + sp, permute8(exit, order));
+            store8(mins + sp, permute8(entryPad, order));
+            store8(maxs + sp, permute8(exitPad, order));
             sp += __builtin_popcount(mask);
         } else {
             const LeafSpan leaf = leafSpan(ref);
@@ -399,20 +380,21 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
         }
         if (sp == 0) return false;
         --sp;
-        ref = refs[sp], tMin = mins[sp], tMax = maxs[sp];
+        ref = refs[sp];
+        seg.tMinPad = mins[sp], seg.tMaxPad = maxs[sp];
     }
 }
 
 #if defined(TESSERA_X86)
-__attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return traverse<false, true>(ray, &hit); }
+__attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true>(ray, hit); }
 __attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<true>(ray); }
 #else
-bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return traverse<false, false>(ray, &hit); }
+bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<false>(ray, hit); }
 bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<false>(ray); }
 #endif
 
 bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const {
-    return useAvx2_ ? intersectAvx2(ray, hit) : traverse<false, false>(ray, &hit);
+    return useAvx2_ ? intersectAvx2(ray, hit) : intersectImpl<false>(ray, hit);
 }
 bool KdTreeAccel::occluded(const Ray& ray) const { return useAvx2_ ? occludedAvx2(ray) : occludedImpl<false>(ray); }
 
