@@ -41,8 +41,8 @@ inline float padUp(float t) { return t + std::abs(t) * 0x1p-21f; }
 constexpr int kStackSize = 7 * (kKdMaxDepth / 3 + 1) + 1;
 
 
-/// Lane i takes lane idx[i] (vpermps / vpermd inside the AVX2 build; GCC lowers it lane by lane
-/// elsewhere, with the same bits).
+/// Lane i takes lane idx[i] mod 8 (only the low three bits count: vpermps / vpermd inside the AVX2
+/// build; GCC lowers it lane by lane elsewhere, with the same bits).
 TESSERA_INLINE Vf8 permute8(Vf8 v, Vi8 idx) {
 #if defined(__clang__)
     Vf8 r;
@@ -63,10 +63,10 @@ TESSERA_INLINE Vi8 permute8(Vi8 v, Vi8 idx) {
 }
 
 // Slot s (lane s) applies, at level l, plane p = (1 << l) − 1 + (s >> (3 − l)) from the side given
-// by bit 2 − l of s (kdtree_wide.h); the meta word holds that plane's axis in bits 2p..2p+1.
+// by bit 2 − l of s (kdtree_wide.h); the meta word holds that plane's axis in bits 3p..3p+1.
 const Vi8 kMetaLane = {7, 7, 7, 7, 7, 7, 7, 7};
 const Vi8 kLevelPlane[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {1, 1, 1, 1, 2, 2, 2, 2}, {3, 3, 4, 4, 5, 5, 6, 6}};
-const Vi8 kLevelAxisShift[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {2, 2, 2, 2, 4, 4, 4, 4}, {6, 6, 8, 8, 10, 10, 12, 12}};
+const Vi8 kLevelAxisShift[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {3, 3, 3, 3, 6, 6, 6, 6}, {9, 9, 12, 12, 15, 15, 18, 18}};
 /// 4 where the slot lies above its level-l plane: the side half of a WideRay table index.
 const Vi8 kLevelSide[3] = {{0, 0, 0, 0, 4, 4, 4, 4}, {0, 0, 4, 4, 0, 0, 4, 4}, {0, 4, 0, 4, 0, 4, 0, 4}};
 const Vi8 kLevelKeyBit[3] = {{4, 4, 4, 4, 4, 4, 4, 4}, {2, 2, 2, 2, 2, 2, 2, 2}, {1, 1, 1, 1, 1, 1, 1, 1}};
@@ -95,10 +95,10 @@ TESSERA_INLINE Vf8 orBits(Vf8 x, Vi8 m) {
     return x;
 }
 
-/// The part of the ray inside a cell: exact bounds (closest-hit kernel: early exit, order) and the
-/// bounds padded by eps at every plane (visit decisions).
+/// The part of the ray inside a cell: its bounds padded by eps at every plane (visit decisions) and
+/// the exact exit (the closest-hit kernel's early exit).
 struct Segment {
-    float tMin, tMax, tMinPad, tMaxPad;
+    float tMinPad, tMaxPad, tMax;
 };
 
 /// Per-ray tables of the wide-node test, indexed by axis + 4·side (side 1: the slot lies above the
@@ -154,17 +154,19 @@ struct WideRay {
 /// among the occupied slots, so a sort by key is the binary traversal's depth-first near-first order,
 /// also for padded or NaN decisions).
 template <bool kAvx, bool kExact>
-TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const Segment& seg, Vf8& entry, Vf8& exit,
-                                   Vf8& entryPad, Vf8& exitPad, Vi8& key) {
+TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const Segment& seg, Vf8& exit, Vf8& entryPad,
+                                   Vf8& exitPad, Vi8& key) {
     const Vf8 planes = load8(n.split);  // lane 7 holds the meta word (a normal float), never used
     Vi8 planeBits;
     std::memcpy(&planeBits, &planes, sizeof planeBits);
     const Vi8 meta = permute8(planeBits, kMetaLane);
-    Vf8 e{}, x{}, eP = broadcast8<kAvx>(seg.tMinPad), xP = broadcast8<kAvx>(seg.tMaxPad);
-    if constexpr (kExact) e = broadcast8<kAvx>(seg.tMin), x = broadcast8<kAvx>(seg.tMax);
+    Vf8 x{}, eP = broadcast8<kAvx>(seg.tMinPad), xP = broadcast8<kAvx>(seg.tMaxPad);
+    if constexpr (kExact) x = broadcast8<kAvx>(seg.tMax);
     Vi8 k{};
     for (int l = 0; l < 3; ++l) {
-        const Vi8 index = ((meta >> kLevelAxisShift[l]) & 3) | kLevelSide[l];
+        // axis + 4·side in the low three bits (the only ones a permute reads; bit 2 of the shifted
+        // meta is clear).
+        const Vi8 index = (meta >> kLevelAxisShift[l]) | kLevelSide[l];
         const Vf8 split = permute8(planes, kLevelPlane[l]), inv = permute8(r.inv, index);
         const Vi8 nearNaN = permute8(r.nearNaN, index), farNaN = nearNaN ^ kQuietNaNBits;
         const Vf8 tPad = (split - permute8(r.orgPad, index)) * inv;
@@ -172,12 +174,11 @@ TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const 
         xP = minNanB(orBits(tPad, farNaN), xP);
         if constexpr (kExact) {
             const Vf8 t = (split - permute8(r.org, index)) * inv;
-            e = maxNanB(orBits(t, nearNaN), e);
             x = minNanB(orBits(t, farNaN), x);
             k |= (farNaN >> 22) & kLevelKeyBit[l];  // 0x1ff where far
         }
     }
-    entry = e, exit = x, key = k;
+    exit = x, key = k;
     entryPad = eP, exitPad = xP;
     return moveMask8Isa<kAvx>(eP <= xP) & n.slotMask();
 }
@@ -233,7 +234,7 @@ TESSERA_INLINE bool startRay(const Ray& ray, const Bounds3f& rootCell_, float sc
         tMin = tn > tMin ? tn : tMin;
         tMax = tf < tMax ? tf : tMax;
     }
-    seg = {tMin, tMax, tMin, tMax};
+    seg = {tMin, tMax, tMax};
     return tMin <= tMax;
 }
 
@@ -264,9 +265,9 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
     while (true) {
         if (!(ref & kKdLeafBit)) {
             const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
-            Vf8 entry, exit, entryPad, exitPad;
+            Vf8 exit, entryPad, exitPad;
             Vi8 key;
-            uint32_t mask = enterSlots<kAvx, /*kExact=*/true>(node, wideRay, seg, entry, exit, entryPad, exitPad, key);
+            uint32_t mask = enterSlots<kAvx, /*kExact=*/true>(node, wideRay, seg, exit, entryPad, exitPad, key);
             if (mask) {
                 int nearest;
                 if (!(mask & (mask - 1))) {  // one slot: no ordering needed
@@ -289,11 +290,11 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                         int k = 31 - __builtin_clz(byKey);
                         byKey ^= 1u << k;
                         int i = slotOfKey[k];
-                        stack[sp++] = {node.child[i], {entry[i], exit[i], entryPad[i], exitPad[i]}};
+                        stack[sp++] = {node.child[i], {entryPad[i], exitPad[i], exit[i]}};
                     }
                 }
                 ref = node.child[nearest];
-                seg = {entry[nearest], exit[nearest], entryPad[nearest], exitPad[nearest]};
+                seg = {entryPad[nearest], exitPad[nearest], exit[nearest]};
                 continue;
             }
         } else {
@@ -316,7 +317,7 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
         do {
             if (sp == 0) goto done;
             --sp;
-        } while (stack[sp].seg.tMin > padUp(tHit));
+        } while (stack[sp].seg.tMinPad > padUp(tHit));
         ref = stack[sp].ref;
         seg = stack[sp].seg;
     }
@@ -358,9 +359,9 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
     while (true) {
         if (!(ref & kKdLeafBit)) {
             const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
-            Vf8 unusedEntry, unusedExit, entryPad, exitPad;
+            Vf8 unusedExit, entryPad, exitPad;
             Vi8 unusedKey;
-            uint32_t mask = enterSlots<kAvx, /*kExact=*/false>(node, wideRay, seg, unusedEntry, unusedExit, entryPad, exitPad, unusedKey);
+            uint32_t mask = enterSlots<kAvx, /*kExact=*/false>(node, wideRay, seg, unusedExit, entryPad, exitPad, unusedKey);
             const Vi8 order = ((Vi8{} + int32_t(kCompactLanes[mask])) >> kNibbleShift) & 7;
             store8(refs + sp, permute8(load8i(node.child), order));
             store8(mins + sp, permute8(entryPad, order));

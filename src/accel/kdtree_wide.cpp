@@ -55,7 +55,7 @@ private:
         }
         int plane = (1 << depth) - 1 + int(code);
         out_[w].split[plane] = n.split();
-        out_[w].meta |= uint32_t(n.axis()) << (2 * plane) | 1u << (KdWideNode::kPlaneShift + plane);
+        out_[w].meta |= uint32_t(n.axis()) << (3 * plane);
         fill(w, b + 1, depth + 1, code * 2);
         fill(w, n.aboveChild(), depth + 1, code * 2 + 1);
     }
@@ -88,7 +88,9 @@ std::string checkKdWideTree(std::span<const KdWideNode> wide, std::span<const Kd
         const std::string where = "wide node " + std::to_string(w);
         if (wideSeen[w]++) return where + " reachable more than once";
         const KdWideNode& n = wide[w];
-        if ((n.meta >> (KdWideNode::kPlaneShift + 7)) != (KdWideNode::kMetaAlways >> (KdWideNode::kPlaneShift + 7)))
+        bool spareBitsClear = true;
+        for (int p = 0; p < 7; ++p) spareBitsClear &= !(n.meta >> (3 * p + 2) & 1u);
+        if (!spareBitsClear || (n.meta >> (KdWideNode::kSlotShift + 8)) != (KdWideNode::kMetaAlways >> (KdWideNode::kSlotShift + 8)))
             return where + ": bad meta word";
         std::vector<bool> planeUsed(7, false);
         for (int slot = 0; slot < 8; ++slot) {
@@ -123,7 +125,6 @@ std::string checkKdWideTree(std::span<const KdWideNode> wide, std::span<const Kd
             if (leafSeen[b]++) return "leaf " + std::to_string(b) + " reachable more than once";
         }
         for (int p = 0; p < 7; ++p) {
-            if (n.hasPlane(p) != planeUsed[size_t(p)]) return where + ": plane " + std::to_string(p) + " flagged wrongly";
             if (!planeUsed[size_t(p)] && (!std::isnan(n.split[p]) || n.axis(p) != 0))
                 return where + ": plane " + std::to_string(p) + " lies below a leaf but is not NaN";
         }

@@ -30,21 +30,20 @@ struct alignas(64) KdWideNode {
     /// in a leaf): a NaN plane distance leaves every lane's interval unchanged (NaN-ignoring min/max),
     /// so a missing plane costs no special case.
     float split[7];
-    /// Bits 2p..2p+1: the axis of plane p (0 where there is none); bits 14..21: the slots holding a
-    /// child; bits 22..28: the planes that exist; bit 30 always set. The traversal loads split[] as 8
-    /// lanes, this word being the 8th: with bit 30 set (and bit 29 clear) it is a normal finite
-    /// float, never a denormal that would slow the lane's arithmetic.
+    /// Bits 3p..3p+1: the axis of plane p (0 where there is none), bit 3p + 2 clear, so that the
+    /// traversal turns (meta >> 3p) into a lane permutation index with one `or` (vpermps reads the
+    /// low three bits only); bits 21..28: the slots holding a child; bit 30 always set. The traversal
+    /// loads split[] as 8 lanes, this word being the 8th: with bit 30 set and bit 29 clear it is a
+    /// normal finite float, never a denormal that would slow the lane's arithmetic.
     uint32_t meta = kMetaAlways;
     /// Slot references: an inner node as its byte offset into the node array (a multiple of 64, bit 0
     /// clear); a leaf with bit 0 set, see kKdLeafBit.
     uint32_t child[8] = {};
 
     static constexpr uint32_t kMetaAlways = 1u << 30;
-    static constexpr int kSlotShift = 14;
-    static constexpr int kPlaneShift = 22;
-    int axis(int plane) const { return int(meta >> (2 * plane) & 3u); }
+    static constexpr int kSlotShift = 21;
+    int axis(int plane) const { return int(meta >> (3 * plane) & 3u); }
     uint32_t slotMask() const { return meta >> kSlotShift & 0xffu; }
-    bool hasPlane(int plane) const { return meta >> (kPlaneShift + plane) & 1u; }
 };
 static_assert(sizeof(KdWideNode) == 64, "one cache line per wide node");
 
