@@ -64,13 +64,15 @@ TESSERA_INLINE Vi8 permute8(Vi8 v, Vi8 idx) {
 
 // Slot s (lane s) applies, at level l, plane p = (1 << l) − 1 + (s >> (3 − l)) from the side given
 // by bit 2 − l of s (kdtree_wide.h); the meta word holds that plane's axis in bits 3p..3p+1.
-const Vi8 kMetaLane = {7, 7, 7, 7, 7, 7, 7, 7};
 const Vi8 kLevelPlane[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {1, 1, 1, 1, 2, 2, 2, 2}, {3, 3, 4, 4, 5, 5, 6, 6}};
 const Vi8 kLevelAxisShift[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {3, 3, 3, 3, 6, 6, 6, 6}, {9, 9, 12, 12, 15, 15, 18, 18}};
 /// 4 where the slot lies above its level-l plane: the side half of a WideRay table index.
 const Vi8 kLevelSide[3] = {{0, 0, 0, 0, 4, 4, 4, 4}, {0, 0, 4, 4, 0, 0, 4, 4}, {0, 4, 0, 4, 0, 4, 0, 4}};
 const Vi8 kLevelKeyBit[3] = {{4, 4, 4, 4, 4, 4, 4, 4}, {2, 2, 2, 2, 2, 2, 2, 2}, {1, 1, 1, 1, 1, 1, 1, 1}};
 constexpr int32_t kQuietNaNBits = 0x7fc00000;
+// A vector in memory: GCC otherwise rebuilt it from an immediate at every node.
+const Vi8 kQuietNaN8 = {kQuietNaNBits, kQuietNaNBits, kQuietNaNBits, kQuietNaNBits,
+                        kQuietNaNBits, kQuietNaNBits, kQuietNaNBits, kQuietNaNBits};
 
 /// All lanes x: one vbroadcastss in the AVX2 build (GCC turned both `Vf8{} + x`, an addition of 0
 /// in the latency chain, and `Vf8{x, x, ...}` into longer sequences).
@@ -79,11 +81,25 @@ TESSERA_INLINE Vf8 broadcast8(float x) {
 #if defined(TESSERA_X86)
     if constexpr (kAvx) {
         Vf8 r;
-        asm("vbroadcastss %1, %0" : "=x"(r) : "x"(x));
+        asm("vbroadcastss %1, %0" : "=x"(r) : "xm"(x));  // from memory when x is there: no ALU port
         return r;
     }
 #endif
     return Vf8{x, x, x, x, x, x, x, x};
+}
+
+/// The node's meta word in all lanes: one vpbroadcastd from memory in the AVX2 build (GCC went
+/// through a general register, two more shuffle-port instructions).
+template <bool kAvx>
+TESSERA_INLINE Vi8 broadcastMeta(const KdWideNode& n) {
+#if defined(TESSERA_X86)
+    if constexpr (kAvx) {
+        Vi8 r;
+        asm("vpbroadcastd %1, %0" : "=x"(r) : "m"(n.meta));
+        return r;
+    }
+#endif
+    return Vi8{} + int32_t(n.meta);
 }
 
 /// x with the bits of m or'ed in: with m = kQuietNaNBits a NaN, with m = 0 x itself.
@@ -157,9 +173,7 @@ template <bool kAvx, bool kExact>
 TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const Segment& seg, Vf8& exit, Vf8& entryPad,
                                    Vf8& exitPad, Vi8& key) {
     const Vf8 planes = load8(n.split);  // lane 7 holds the meta word (a normal float), never used
-    Vi8 planeBits;
-    std::memcpy(&planeBits, &planes, sizeof planeBits);
-    const Vi8 meta = permute8(planeBits, kMetaLane);
+    const Vi8 meta = broadcastMeta<kAvx>(n);
     Vf8 x{}, eP = broadcast8<kAvx>(seg.tMinPad), xP = broadcast8<kAvx>(seg.tMaxPad);
     if constexpr (kExact) x = broadcast8<kAvx>(seg.tMax);
     Vi8 k{};
@@ -168,7 +182,7 @@ TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const 
         // meta is clear).
         const Vi8 index = (meta >> kLevelAxisShift[l]) | kLevelSide[l];
         const Vf8 split = permute8(planes, kLevelPlane[l]), inv = permute8(r.inv, index);
-        const Vi8 nearNaN = permute8(r.nearNaN, index), farNaN = nearNaN ^ kQuietNaNBits;
+        const Vi8 nearNaN = permute8(r.nearNaN, index), farNaN = nearNaN ^ kQuietNaN8;
         const Vf8 tPad = (split - permute8(r.orgPad, index)) * inv;
         eP = maxNanB(orBits(tPad, nearNaN), eP);
         xP = minNanB(orBits(tPad, farNaN), xP);
@@ -362,7 +376,7 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
             Vf8 unusedExit, entryPad, exitPad;
             Vi8 unusedKey;
             uint32_t mask = enterSlots<kAvx, /*kExact=*/false>(node, wideRay, seg, unusedExit, entryPad, exitPad, unusedKey);
-            const Vi8 order = ((Vi8{} + int32_t(kCompactLanes[mask])) >> kNibbleShift) & 7;
+            const Vi8 order = (Vi8{} + int32_t(kCompactLanes[mask])) >> kNibbleShift;  // permutes read 3 bits
             store8(refs + sp, permute8(load8i(node.child), order));
             store8(mins + sp, permute8(entryPad, order));
             store8(maxs + sp, permute8(exitPad, order));
