@@ -68,7 +68,6 @@ const Vi8 kLevelPlane[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {1, 1, 1, 1, 2, 2, 2, 2}, 
 const Vi8 kLevelAxisShift[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {3, 3, 3, 3, 6, 6, 6, 6}, {9, 9, 12, 12, 15, 15, 18, 18}};
 /// 4 where the slot lies above its level-l plane: the side half of a WideRay table index.
 const Vi8 kLevelSide[3] = {{0, 0, 0, 0, 4, 4, 4, 4}, {0, 0, 4, 4, 0, 0, 4, 4}, {0, 4, 0, 4, 0, 4, 0, 4}};
-const Vi8 kLevelKeyBit[3] = {{4, 4, 4, 4, 4, 4, 4, 4}, {2, 2, 2, 2, 2, 2, 2, 2}, {1, 1, 1, 1, 1, 1, 1, 1}};
 constexpr int32_t kQuietNaNBits = 0x7fc00000;
 // A vector in memory: GCC otherwise rebuilt it from an immediate at every node.
 const Vi8 kQuietNaN8 = {kQuietNaNBits, kQuietNaNBits, kQuietNaNBits, kQuietNaNBits,
@@ -130,6 +129,17 @@ struct WideRay {
     /// 0 on the far side (the plane bounds its entry). Or'ed into a distance it turns the bound that
     /// does not apply into a NaN, which the NaN-ignoring max/min skip.
     Vi8 nearNaN;
+    uint32_t downBits = 0;  ///< bit a set when the ray moves downward on axis a
+
+    /// The slot's rank in the binary traversal's near-first order: bit 2 − l set when the slot lies
+    /// on the far side of its level-l plane, i.e. its side bit flipped when the ray moves downward
+    /// on that plane's axis. Distinct among a node's occupied slots (their paths part at a plane
+    /// that both have), so sorting by it is the binary depth-first near-first order, also for
+    /// padded or NaN decisions.
+    uint32_t nearFirstKey(const KdWideNode& n, int slot) const {
+        const auto down = [&](int plane) { return downBits >> n.axis(plane) & 1u; };
+        return uint32_t(slot) ^ (down(0) << 2 | down(1 + (slot >> 2)) << 1 | down(3 + (slot >> 1)));
+    }
 
     /// eps: the traversal's padding; upward[a]: the ray moves up on axis a (from the sign of 1/d).
     WideRay() = default;
@@ -144,11 +154,12 @@ struct WideRay {
                 // Far side: entry t − eps·|1/d| = (split − (o + eps·sign d))/d; near side: exit t + eps·|1/d|.
                 orgPad[i] = (near == upward[a]) ? ray.o[a] - eps : ray.o[a] + eps;
                 nearNaN[i] = near ? kQuietNaNBits : 0;
+                downBits |= upward[a] ? 0u : 1u << a;
             }
     }
 };
 
-/// The slots of a wide node that the segment [tMin, tMax] enters, as a bit mask. For each slot
+/// The slots of a wide node that the segment `seg` enters, as a bit mask. For each slot
 /// (lane) and level, the plane distance t = (split − o[axis])·(1/d[axis]) (the split permuted into
 /// the slot lanes by level, origin and 1/d by the plane's axis and the slot's side) bounds the
 /// segment from one side: a slot on the near side of the plane (below it for a ray moving up, above
@@ -163,20 +174,16 @@ struct WideRay {
 /// path is then compared padded against padded, which visits a superset of the binary traversal's
 /// cells (that compared each padded plane with the exact bounds of the planes above it). Comparing
 /// against the exact segment instead is not: a cell visited only thanks to the padding has an
-/// inverted exact segment, and none of its children would pass. With `kExact`, `entry`/`exit`
-/// are also the exact segments, for the closest-hit kernel's early exit and near-first order;
-/// the any-hit kernel needs neither (a third fewer instructions per node). `key` (kExact only) is each slot's rank in the binary
-/// near-first order: bit 2 − l set when the slot lies on the far side of its level-l plane (distinct
-/// among the occupied slots, so a sort by key is the binary traversal's depth-first near-first order,
-/// also for padded or NaN decisions).
+/// inverted exact segment, and none of its children would pass. With `kExact`, `exit` is also the
+/// exact exit, for the closest-hit kernel's early exit; the any-hit kernel needs none (a third
+/// fewer instructions per node).
 template <bool kAvx, bool kExact>
 TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const Segment& seg, Vf8& exit, Vf8& entryPad,
-                                   Vf8& exitPad, Vi8& key) {
+                                   Vf8& exitPad) {
     const Vf8 planes = load8(n.split);  // lane 7 holds the meta word (a normal float), never used
     const Vi8 meta = broadcastMeta<kAvx>(n);
     Vf8 x{}, eP = broadcast8<kAvx>(seg.tMinPad), xP = broadcast8<kAvx>(seg.tMaxPad);
     if constexpr (kExact) x = broadcast8<kAvx>(seg.tMax);
-    Vi8 k{};
     for (int l = 0; l < 3; ++l) {
         // axis + 4·side in the low three bits (the only ones a permute reads; bit 2 of the shifted
         // meta is clear).
@@ -189,11 +196,9 @@ TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const 
         if constexpr (kExact) {
             const Vf8 t = (split - permute8(r.org, index)) * inv;
             x = minNanB(orBits(t, farNaN), x);
-            k |= (farNaN >> 22) & kLevelKeyBit[l];  // 0x1ff where far
         }
     }
-    exit = x, key = k;
-    entryPad = eP, exitPad = xP;
+    exit = x, entryPad = eP, exitPad = xP;
     return moveMask8Isa<kAvx>(eP <= xP) & n.slotMask();
 }
 
@@ -280,23 +285,21 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
         if (!(ref & kKdLeafBit)) {
             const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
             Vf8 exit, entryPad, exitPad;
-            Vi8 key;
-            uint32_t mask = enterSlots<kAvx, /*kExact=*/true>(node, wideRay, seg, exit, entryPad, exitPad, key);
+            uint32_t mask = enterSlots<kAvx, /*kExact=*/true>(node, wideRay, seg, exit, entryPad, exitPad);
             if (mask) {
                 int nearest;
                 if (!(mask & (mask - 1))) {  // one slot: no ordering needed
                     nearest = __builtin_ctz(mask);
                 } else {
                     // Near-first: the slots by key (distinct, < 8), the farthest pushed first.
-                    int32_t keys[8];
-                    std::memcpy(keys, &key, sizeof keys);
                     int slotOfKey[8];
                     uint32_t byKey = 0;
                     while (mask) {
                         int i = __builtin_ctz(mask);
                         mask &= mask - 1;
-                        slotOfKey[keys[i]] = i;
-                        byKey |= 1u << keys[i];
+                        uint32_t k = wideRay.nearFirstKey(node, i);
+                        slotOfKey[k] = i;
+                        byKey |= 1u << k;
                     }
                     nearest = slotOfKey[__builtin_ctz(byKey)];
                     byKey &= byKey - 1;
@@ -374,8 +377,7 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
         if (!(ref & kKdLeafBit)) {
             const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
             Vf8 unusedExit, entryPad, exitPad;
-            Vi8 unusedKey;
-            uint32_t mask = enterSlots<kAvx, /*kExact=*/false>(node, wideRay, seg, unusedExit, entryPad, exitPad, unusedKey);
+            uint32_t mask = enterSlots<kAvx, /*kExact=*/false>(node, wideRay, seg, unusedExit, entryPad, exitPad);
             const Vi8 order = (Vi8{} + int32_t(kCompactLanes[mask])) >> kNibbleShift;  // permutes read 3 bits
             store8(refs + sp, permute8(load8i(node.child), order));
             store8(mins + sp, permute8(entryPad, order));
