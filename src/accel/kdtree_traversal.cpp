@@ -110,16 +110,15 @@ TESSERA_INLINE Vf8 orBits(Vf8 x, Vi8 m) {
     return x;
 }
 
-/// The part of the ray inside a cell: its bounds padded by eps at every plane (visit decisions) and
-/// the exact exit (the closest-hit kernel's early exit).
+/// The part of the ray inside a cell, its bounds padded by eps at every plane on the path.
 struct Segment {
-    float tMinPad, tMaxPad, tMax;
+    float tMin, tMax;
 };
 
 /// Per-ray tables of the wide-node test, indexed by axis + 4·side (side 1: the slot lies above the
 /// plane), permuted into the slot lanes by each level's (axis, side).
 struct WideRay {
-    Vf8 org, inv;  ///< origin, 1/d (the same for both sides)
+    Vf8 inv;  ///< 1/d (the same for both sides)
     /// The origin moved by eps along the axis so that (split − orgPad)·(1/d) is the plane distance
     /// padded by eps·|1/d| in the direction that widens the slot's cell: towards the origin where
     /// the plane is the slot's entry (slot on the far side), away from it where it is the exit.
@@ -143,13 +142,12 @@ struct WideRay {
 
     /// eps: the traversal's padding; upward[a]: the ray moves up on axis a (from the sign of 1/d).
     WideRay() = default;
-    WideRay(const Ray& ray, const Vec3f& invD, const bool (&upward)[3], float eps) : org{}, inv{}, orgPad{}, nearNaN{} {
+    WideRay(const Ray& ray, const Vec3f& invD, const bool (&upward)[3], float eps) : inv{}, orgPad{}, nearNaN{} {
         for (int side = 0; side < 2; ++side)
             for (int a = 0; a < 3; ++a) {
                 int i = a + 4 * side;
                 // Below the plane is the near side of a ray moving up.
                 bool near = side == 0 ? upward[a] : !upward[a];
-                org[i] = ray.o[a];
                 inv[i] = invD[a];
                 // Far side: entry t − eps·|1/d| = (split − (o + eps·sign d))/d; near side: exit t + eps·|1/d|.
                 orgPad[i] = (near == upward[a]) ? ray.o[a] - eps : ray.o[a] + eps;
@@ -159,31 +157,26 @@ struct WideRay {
     }
 };
 
-/// The slots of a wide node that the segment `seg` enters, as a bit mask. For each slot
-/// (lane) and level, the plane distance t = (split − o[axis])·(1/d[axis]) (the split permuted into
-/// the slot lanes by level, origin and 1/d by the plane's axis and the slot's side) bounds the
-/// segment from one side: a slot on the near side of the plane (below it for a ray moving up, above
-/// it for one moving down) keeps [−inf, t], one on the far side [t, +inf]; the slot's segment is the
-/// intersection (max of the entries, min of the exits). The bound that does not apply is made a NaN
-/// and skipped by the NaN-ignoring max/min (the first operand, chained on a non-NaN accumulator);
-/// so is a level without a plane (NaN split) and the 0·inf of an origin in the plane of a zero
-/// direction component (both sides visited, as in the binary traversal).
-/// The visit decision uses the planes moved by eps to widen each slot's cell (a cell is visited if
-/// the ray passes within eps of it: the robustness rule of the traversal below), intersected with
-/// the padded segment from above (`entryPad`/`exitPad` carry it down). Every pair of planes on the
-/// path is then compared padded against padded, which visits a superset of the binary traversal's
-/// cells (that compared each padded plane with the exact bounds of the planes above it). Comparing
-/// against the exact segment instead is not: a cell visited only thanks to the padding has an
-/// inverted exact segment, and none of its children would pass. With `kExact`, `exit` is also the
-/// exact exit, for the closest-hit kernel's early exit; the any-hit kernel needs none (a third
-/// fewer instructions per node).
-template <bool kAvx, bool kExact>
-TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const Segment& seg, Vf8& exit, Vf8& entryPad,
-                                   Vf8& exitPad) {
+/// The slots of a wide node that the segment `seg` enters, as a bit mask, and their segments
+/// (`entry`, `exit`). For each slot (lane) and level, the plane distance t = (split − o)·(1/d) (the
+/// split permuted into the slot lanes by level, origin and 1/d by the plane's axis and the slot's
+/// side) bounds the segment from one side: a slot on the near side of the plane (below it for a ray
+/// moving up, above it for one moving down) keeps [−inf, t], one on the far side [t, +inf]; the
+/// slot's segment is the intersection (max of the entries, min of the exits). The bound that does
+/// not apply is made a NaN and skipped by the NaN-ignoring max/min (the first operand, chained on a
+/// non-NaN accumulator); so is a level without a plane (NaN split) and the 0·inf of an origin in
+/// the plane of a zero direction component (both sides visited, as in the binary traversal).
+/// Robustness: every plane is moved by eps to widen the slot's cell (a cell is visited if the ray
+/// passes within eps of it, see startRay), and the segments carried down are these padded ones.
+/// Every pair of planes on a path is thus compared padded against padded, which visits a superset
+/// of the binary traversal's cells (that compared each padded plane with the exact bounds of the
+/// planes above it). Comparing with the exact segment from above instead is not: a cell entered
+/// only thanks to the padding has an inverted exact segment, and none of its children would pass.
+template <bool kAvx>
+TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const Segment& seg, Vf8& entry, Vf8& exit) {
     const Vf8 planes = load8(n.split);  // lane 7 holds the meta word (a normal float), never used
     const Vi8 meta = broadcastMeta<kAvx>(n);
-    Vf8 x{}, eP = broadcast8<kAvx>(seg.tMinPad), xP = broadcast8<kAvx>(seg.tMaxPad);
-    if constexpr (kExact) x = broadcast8<kAvx>(seg.tMax);
+    Vf8 eP = broadcast8<kAvx>(seg.tMin), xP = broadcast8<kAvx>(seg.tMax);
     for (int l = 0; l < 3; ++l) {
         // axis + 4·side in the low three bits (the only ones a permute reads; bit 2 of the shifted
         // meta is clear).
@@ -193,12 +186,8 @@ TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const 
         const Vf8 tPad = (split - permute8(r.orgPad, index)) * inv;
         eP = maxNanB(orBits(tPad, nearNaN), eP);
         xP = minNanB(orBits(tPad, farNaN), xP);
-        if constexpr (kExact) {
-            const Vf8 t = (split - permute8(r.org, index)) * inv;
-            x = minNanB(orBits(t, farNaN), x);
-        }
     }
-    exit = x, entryPad = eP, exitPad = xP;
+    entry = eP, exit = xP;
     return moveMask8Isa<kAvx>(eP <= xP) & n.slotMask();
 }
 
@@ -253,14 +242,17 @@ TESSERA_INLINE bool startRay(const Ray& ray, const Bounds3f& rootCell_, float sc
         tMin = tn > tMin ? tn : tMin;
         tMax = tf < tMax ? tf : tMax;
     }
-    seg = {tMin, tMax, tMax};
+    seg = {tMin, tMax};
     return tMin <= tMax;
 }
 
 }  // namespace
 
 /// The closest-hit kernel: entered slots visited in the binary traversal's near-first order, the
-/// others pushed; stops when a hit lies inside the current leaf's exact segment.
+/// others pushed. There is no separate early exit: once a hit is found, every pushed segment that
+/// starts beyond it is dropped when popped, and in near-first order that is everything behind the
+/// hit's cell. (An exact exit per segment, for the classic "hit inside this leaf" test, cost an
+/// extra permute, product and min per level in every node.)
 template <bool kAvx>
 TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
     WideRay wideRay;
@@ -284,8 +276,8 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
     while (true) {
         if (!(ref & kKdLeafBit)) {
             const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
-            Vf8 exit, entryPad, exitPad;
-            uint32_t mask = enterSlots<kAvx, /*kExact=*/true>(node, wideRay, seg, exit, entryPad, exitPad);
+            Vf8 entry, exit;
+            uint32_t mask = enterSlots<kAvx>(node, wideRay, seg, entry, exit);
             if (mask) {
                 int nearest;
                 if (!(mask & (mask - 1))) {  // one slot: no ordering needed
@@ -307,11 +299,11 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                         int k = 31 - __builtin_clz(byKey);
                         byKey ^= 1u << k;
                         int i = slotOfKey[k];
-                        stack[sp++] = {node.child[i], {entryPad[i], exitPad[i], exit[i]}};
+                        stack[sp++] = {node.child[i], {entry[i], exit[i]}};
                     }
                 }
                 ref = node.child[nearest];
-                seg = {entryPad[nearest], exitPad[nearest], exit[nearest]};
+                seg = {entry[nearest], exit[nearest]};
                 continue;
             }
         } else {
@@ -327,14 +319,12 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
             } else if (intersectMixedLeaf<false>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, tHit, bestMixed)) {
                 bestBlock = nullptr;
             }
-            // Early exit: a hit inside this leaf's segment is closer than anything behind it.
-            if (tHit <= seg.tMax && tHit < ray.tMax) break;
         }
         // Next segment along the ray, unless the closest hit lies before it.
         do {
             if (sp == 0) goto done;
             --sp;
-        } while (stack[sp].seg.tMinPad > padUp(tHit));
+        } while (stack[sp].seg.tMin > padUp(tHit));
         ref = stack[sp].ref;
         seg = stack[sp].seg;
     }
@@ -358,7 +348,7 @@ done:
 
 /// The any-hit kernel: no order among the entered slots, so a node's step needs no branch on how
 /// many it entered: all are pushed at once (compacted by a permutation from kCompactLanes, onto a
-/// stack of structure-of-arrays) and the top is popped. Only padded segments are carried.
+/// stack of structure-of-arrays) and the top is popped.
 template <bool kAvx>
 TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
     WideRay wideRay;
@@ -376,12 +366,12 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
     while (true) {
         if (!(ref & kKdLeafBit)) {
             const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
-            Vf8 unusedExit, entryPad, exitPad;
-            uint32_t mask = enterSlots<kAvx, /*kExact=*/false>(node, wideRay, seg, unusedExit, entryPad, exitPad);
+            Vf8 entry, exit;
+            uint32_t mask = enterSlots<kAvx>(node, wideRay, seg, entry, exit);
             const Vi8 order = (Vi8{} + int32_t(kCompactLanes[mask])) >> kNibbleShift;  // permutes read 3 bits
             store8(refs + sp, permute8(load8i(node.child), order));
-            store8(mins + sp, permute8(entryPad, order));
-            store8(maxs + sp, permute8(exitPad, order));
+            store8(mins + sp, permute8(entry, order));
+            store8(maxs + sp, permute8(exit, order));
             sp += __builtin_popcount(mask);
         } else {
             const LeafSpan leaf = leafSpan(ref);
@@ -398,7 +388,7 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
         if (sp == 0) return false;
         --sp;
         ref = refs[sp];
-        seg.tMinPad = mins[sp], seg.tMaxPad = maxs[sp];
+        seg = {mins[sp], maxs[sp]};
     }
 }
 
