@@ -181,7 +181,9 @@ TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const 
         // axis + 4·side in the low three bits (the only ones a permute reads; bit 2 of the shifted
         // meta is clear).
         const Vi8 index = (meta >> kLevelAxisShift[l]) | kLevelSide[l];
-        const Vf8 split = permute8(planes, kLevelPlane[l]), inv = permute8(r.inv, index);
+        // Level 0's one plane straight from memory (a load, no shuffle).
+        const Vf8 split = l == 0 ? broadcast8<kAvx>(n.split[0]) : permute8(planes, kLevelPlane[l]);
+        const Vf8 inv = permute8(r.inv, index);
         const Vi8 nearNaN = permute8(r.nearNaN, index), farNaN = nearNaN ^ kQuietNaN8;
         const Vf8 tPad = (split - permute8(r.orgPad, index)) * inv;
         eP = maxNanB(orBits(tPad, nearNaN), eP);
