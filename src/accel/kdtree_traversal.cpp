@@ -69,9 +69,6 @@ const Vi8 kLevelAxisShift[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {3, 3, 3, 3, 6, 6, 6, 
 /// 4 where the slot lies above its level-l plane: the side half of a WideRay table index.
 const Vi8 kLevelSide[3] = {{0, 0, 0, 0, 4, 4, 4, 4}, {0, 0, 4, 4, 0, 0, 4, 4}, {0, 4, 0, 4, 0, 4, 0, 4}};
 constexpr int32_t kQuietNaNBits = 0x7fc00000;
-// A vector in memory: GCC otherwise rebuilt it from an immediate at every node.
-const Vi8 kQuietNaN8 = {kQuietNaNBits, kQuietNaNBits, kQuietNaNBits, kQuietNaNBits,
-                        kQuietNaNBits, kQuietNaNBits, kQuietNaNBits, kQuietNaNBits};
 
 /// All lanes x: one vbroadcastss in the AVX2 build (GCC turned both `Vf8{} + x`, an addition of 0
 /// in the latency chain, and `Vf8{x, x, ...}` into longer sequences).
@@ -128,6 +125,9 @@ struct WideRay {
     /// 0 on the far side (the plane bounds its entry). Or'ed into a distance it turns the bound that
     /// does not apply into a NaN, which the NaN-ignoring max/min skip.
     Vi8 nearNaN;
+    /// kQuietNaNBits in every lane, kept with the ray: as a constant, GCC rebuilt it from an
+    /// immediate at every node (three instructions, one on the shuffle port).
+    Vi8 quietNaN;
     uint32_t downBits = 0;  ///< bit a set when the ray moves downward on axis a
 
     /// The slot's rank in the binary traversal's near-first order: bit 2 − l set when the slot lies
@@ -142,7 +142,7 @@ struct WideRay {
 
     /// eps: the traversal's padding; upward[a]: the ray moves up on axis a (from the sign of 1/d).
     WideRay() = default;
-    WideRay(const Ray& ray, const Vec3f& invD, const bool (&upward)[3], float eps) : inv{}, orgPad{}, nearNaN{} {
+    WideRay(const Ray& ray, const Vec3f& invD, const bool (&upward)[3], float eps) : inv{}, orgPad{}, nearNaN{}, quietNaN{} {
         for (int side = 0; side < 2; ++side)
             for (int a = 0; a < 3; ++a) {
                 int i = a + 4 * side;
@@ -154,6 +154,7 @@ struct WideRay {
                 nearNaN[i] = near ? kQuietNaNBits : 0;
                 downBits |= upward[a] ? 0u : 1u << a;
             }
+        quietNaN = Vi8{} + kQuietNaNBits;
     }
 };
 
@@ -184,7 +185,7 @@ TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const 
         // Level 0's one plane straight from memory (a load, no shuffle).
         const Vf8 split = l == 0 ? broadcast8<kAvx>(n.split[0]) : permute8(planes, kLevelPlane[l]);
         const Vf8 inv = permute8(r.inv, index);
-        const Vi8 nearNaN = permute8(r.nearNaN, index), farNaN = nearNaN ^ kQuietNaN8;
+        const Vi8 nearNaN = permute8(r.nearNaN, index), farNaN = nearNaN ^ r.quietNaN;
         const Vf8 tPad = (split - permute8(r.orgPad, index)) * inv;
         eP = maxNanB(orBits(tPad, nearNaN), eP);
         xP = minNanB(orBits(tPad, farNaN), xP);
