@@ -3,9 +3,9 @@
 /// "TA_B^rec" family (Havran 2000, thesis Section 4; pbrt-v3; Wald's thesis Section 7.2) with the
 /// three binary levels of a treelet decided in one 8-lane step. Each lane (a slot: up to three
 /// planes with a side each) clips the current segment; the entered slots are visited in the binary
-/// traversal's near-first order, the others pushed. The closest-hit kernel stops as soon as a hit
-/// lies inside the current leaf's segment (nothing behind can be closer); the any-hit kernel stops
-/// at the first hit.
+/// traversal's near-first order (closest-hit) or in any order (any-hit), the others pushed. The
+/// closest-hit kernel drops every pushed segment that starts beyond its hit; the any-hit kernel
+/// stops at the first hit.
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -228,7 +228,7 @@ TESSERA_INLINE bool startRay(const Ray& ray, const Bounds3f& rootCell_, float sc
     // exact triangle. So the traversal visits every cell that the ray passes within `eps` of:
     // 16 ulps of the largest coordinate involved. Across a plane of axis a that is a distance of
     // eps·|1/d_a| along the ray (large for rays almost parallel to the plane), which pads each
-    // visit decision. Exact segment bounds are kept beside, so the early exit stays exact.
+    // plane of every visit decision (enterSlots).
     const float eps = 0x1p-19f * (sceneMagnitude_ + maxComponent(glm::abs(ray.o)));
     bool upward[3];
     for (int a = 0; a < 3; ++a) upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
