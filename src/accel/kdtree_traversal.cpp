@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "accel/bvh_simd.h"
 #include "accel/mixed_leaf.h"
@@ -68,7 +69,6 @@ const Vi8 kLevelPlane[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {1, 1, 1, 1, 2, 2, 2, 2}, 
 const Vi8 kLevelAxisShift[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {3, 3, 3, 3, 6, 6, 6, 6}, {9, 9, 12, 12, 15, 15, 18, 18}};
 /// 4 where the slot lies above its level-l plane: the side half of a WideRay table index.
 const Vi8 kLevelSide[3] = {{0, 0, 0, 0, 4, 4, 4, 4}, {0, 0, 4, 4, 0, 0, 4, 4}, {0, 4, 0, 4, 0, 4, 0, 4}};
-constexpr int32_t kQuietNaNBits = 0x7fc00000;
 
 /// All lanes x: one vbroadcastss in the AVX2 build (GCC turned both `Vf8{} + x`, an addition of 0
 /// in the latency chain, and `Vf8{x, x, ...}` into longer sequences).
@@ -98,15 +98,6 @@ TESSERA_INLINE Vi8 broadcastMeta(const KdWideNode& n) {
     return Vi8{} + int32_t(n.meta);
 }
 
-/// x with the bits of m or'ed in: with m = kQuietNaNBits a NaN, with m = 0 x itself.
-TESSERA_INLINE Vf8 orBits(Vf8 x, Vi8 m) {
-    Vi8 xi;
-    std::memcpy(&xi, &x, sizeof xi);
-    xi |= m;
-    std::memcpy(&x, &xi, sizeof x);
-    return x;
-}
-
 /// The part of the ray inside a cell, its bounds padded by eps at every plane on the path.
 struct Segment {
     float tMin, tMax;
@@ -116,18 +107,14 @@ struct Segment {
 /// plane), permuted into the slot lanes by each level's (axis, side).
 struct WideRay {
     Vf8 inv;  ///< 1/d (the same for both sides)
-    /// The origin moved by eps along the axis so that (split − orgPad)·(1/d) is the plane distance
+    /// The origin moved by eps along the axis so that (split − o')·(1/d) is the plane distance
     /// padded by eps·|1/d| in the direction that widens the slot's cell: towards the origin where
     /// the plane is the slot's entry (slot on the far side), away from it where it is the exit.
-    /// Moving the origin instead of padding the distance costs nothing per node.
-    Vf8 orgPad;
-    /// kQuietNaNBits where the slot lies on the near side of the plane (the plane bounds its exit),
-    /// 0 on the far side (the plane bounds its entry). Or'ed into a distance it turns the bound that
-    /// does not apply into a NaN, which the NaN-ignoring max/min skip.
-    Vi8 nearNaN;
-    /// kQuietNaNBits in every lane, kept with the ray: as a constant, GCC rebuilt it from an
-    /// immediate at every node (three instructions, one on the shuffle port).
-    Vi8 quietNaN;
+    /// Moving the origin instead of padding the distance costs nothing per node. `orgEntry` holds
+    /// it where the plane bounds the slot's entry (far side) and NaN where it does not (near side),
+    /// `orgExit` the other way round: the distance of the bound that does not apply is then a NaN,
+    /// which the NaN-ignoring max/min skip.
+    Vf8 orgEntry, orgExit;
     uint32_t downBits = 0;  ///< bit a set when the ray moves downward on axis a
 
     /// The slot's rank in the binary traversal's near-first order: bit 2 − l set when the slot lies
@@ -142,7 +129,8 @@ struct WideRay {
 
     /// eps: the traversal's padding; upward[a]: the ray moves up on axis a (from the sign of 1/d).
     WideRay() = default;
-    WideRay(const Ray& ray, const Vec3f& invD, const bool (&upward)[3], float eps) : inv{}, orgPad{}, nearNaN{}, quietNaN{} {
+    WideRay(const Ray& ray, const Vec3f& invD, const bool (&upward)[3], float eps) : inv{}, orgEntry{}, orgExit{} {
+        const float nan = std::numeric_limits<float>::quiet_NaN();
         for (int side = 0; side < 2; ++side)
             for (int a = 0; a < 3; ++a) {
                 int i = a + 4 * side;
@@ -150,11 +138,11 @@ struct WideRay {
                 bool near = side == 0 ? upward[a] : !upward[a];
                 inv[i] = invD[a];
                 // Far side: entry t − eps·|1/d| = (split − (o + eps·sign d))/d; near side: exit t + eps·|1/d|.
-                orgPad[i] = (near == upward[a]) ? ray.o[a] - eps : ray.o[a] + eps;
-                nearNaN[i] = near ? kQuietNaNBits : 0;
+                float moved = (near == upward[a]) ? ray.o[a] - eps : ray.o[a] + eps;
+                orgEntry[i] = near ? nan : moved;
+                orgExit[i] = near ? moved : nan;
                 downBits |= upward[a] ? 0u : 1u << a;
             }
-        quietNaN = Vi8{} + kQuietNaNBits;
     }
 };
 
@@ -164,8 +152,8 @@ struct WideRay {
 /// side) bounds the segment from one side: a slot on the near side of the plane (below it for a ray
 /// moving up, above it for one moving down) keeps [−inf, t], one on the far side [t, +inf]; the
 /// slot's segment is the intersection (max of the entries, min of the exits). The bound that does
-/// not apply is made a NaN and skipped by the NaN-ignoring max/min (the first operand, chained on a
-/// non-NaN accumulator); so is a level without a plane (NaN split) and the 0·inf of an origin in
+/// not apply is a NaN (WideRay::orgEntry/orgExit) and skipped by the NaN-ignoring max/min (the first
+/// operand, chained on a non-NaN accumulator); so is a level without a plane (NaN split) and the 0·inf of an origin in
 /// the plane of a zero direction component (both sides visited, as in the binary traversal).
 /// Robustness: every plane is moved by eps to widen the slot's cell (a cell is visited if the ray
 /// passes within eps of it, see startRay), and the segments carried down are these padded ones.
@@ -185,10 +173,8 @@ TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const 
         // Level 0's one plane straight from memory (a load, no shuffle).
         const Vf8 split = l == 0 ? broadcast8<kAvx>(n.split[0]) : permute8(planes, kLevelPlane[l]);
         const Vf8 inv = permute8(r.inv, index);
-        const Vi8 nearNaN = permute8(r.nearNaN, index), farNaN = nearNaN ^ r.quietNaN;
-        const Vf8 tPad = (split - permute8(r.orgPad, index)) * inv;
-        eP = maxNanB(orBits(tPad, nearNaN), eP);
-        xP = minNanB(orBits(tPad, farNaN), xP);
+        eP = maxNanB((split - permute8(r.orgEntry, index)) * inv, eP);
+        xP = minNanB((split - permute8(r.orgExit, index)) * inv, xP);
     }
     entry = eP, exit = xP;
     return moveMask8Isa<kAvx>(eP <= xP) & n.slotMask();
