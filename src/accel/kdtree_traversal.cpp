@@ -362,6 +362,16 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
             store8(mins + sp, permute8(entry, order));
             store8(maxs + sp, permute8(exit, order));
             sp += __builtin_popcount(mask);
+            if (mask) {
+                // The top entry is the highest entered slot: its reference straight from the node
+                // (a load after a bit scan) rather than through the stack (table load, shuffles,
+                // store and reload between this node and the next one's address).
+                const int top = 31 - __builtin_clz(mask);
+                --sp;
+                ref = node.child[top];
+                seg = {mins[sp], maxs[sp]};
+                continue;
+            }
         } else {
             const LeafSpan leaf = leafSpan(ref);
             if (!leaf.mixed) {
