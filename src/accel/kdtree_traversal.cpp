@@ -243,12 +243,7 @@ TESSERA_INLINE bool startRay(const Ray& ray, const Bounds3f& rootCell_, float sc
 /// hit's cell. (An exact exit per segment, for the classic "hit inside this leaf" test, cost an
 /// extra permute, product and min per level in every node.)
 template <bool kAvx>
-TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& rayIn, Hit& hit) const {
-    // A copy in this frame: the caller's ray lies anywhere (a ray array), and a field the compiler
-    // reloads after a store to the traversal stack could wait on that store when their addresses
-    // share the low 12 bits ("4K aliasing"): whole ray kinds ran 25-40% slower in some process
-    // layouts.
-    const Ray ray = rayIn;
+TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
     WideRay wideRay;
     Segment seg;
     if (wide_.empty() || !startRay(ray, rootCell_, sceneMagnitude_, wideRay, seg)) return false;
@@ -344,8 +339,7 @@ done:
 /// many it entered: all are pushed at once (compacted by a permutation from kCompactLanes, onto a
 /// stack of structure-of-arrays) and the top is popped.
 template <bool kAvx>
-TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& rayIn) const {
-    const Ray ray = rayIn;  // see intersectImpl
+TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
     WideRay wideRay;
     Segment seg;
     if (wide_.empty() || !startRay(ray, rootCell_, sceneMagnitude_, wideRay, seg)) return false;
