@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "accel/kdtree_accel.h"
+#include "accel/kdtree_wide.h"
 #include "accel/validate.h"
 #include "accel_pathologies.h"
 #include "scene/gltf_loader.h"
@@ -109,6 +110,18 @@ TEST(KdTree, PlanarTrianglesInTheSplitPlane) {
     KdTreeAccel kd(g, AccelOptions{});
     EXPECT_TRUE(hasSplitAt(kd, 2, 0.5f)) << "no split in the plane of the planar triangles";
     expectMatchesEmbree(g, 3000, "planar triangles in the split plane");
+    // This ray meets the plane 4.5e-8 from a grid vertex, where four leaf cells and the plane meet:
+    // the hit cell is entered only thanks to the eps padding, one wide-node level below a cell that
+    // also was. Wide nodes that compared their padded planes with the exact (there: inverted)
+    // segment from above missed it; the binary traversal and brute force find it.
+    Ray corner{Vec3f(0.9099451899528503f, 0.2727876603603363f, 0.262631893157959f),
+               Vec3f(-0.9102703928947449f, 0.2862842381000519f, 0.29908037185668945f)};
+    Hit want, got;
+    ASSERT_TRUE(createAccel("brute", g)->intersect(corner, want));
+    ASSERT_TRUE(kd.intersect(corner, got));
+    EXPECT_EQ(got.primId, want.primId);
+    EXPECT_EQ(got.t, want.t);
+    EXPECT_TRUE(kd.occluded(corner));
 }
 
 TEST(KdTree, StraddlingTrianglesAreReferencedInBothChildrenAndPerfectSplitsPay) {
@@ -245,6 +258,129 @@ TEST(KdTree, PortableAndAvx2KernelsGiveTheSameBits) {
             EXPECT_EQ(a.primId, b.primId);
         }
     EXPECT_GT(hits, 2000u);
+}
+
+TEST(KdTree, WideNodesDescribeExactlyTheBinaryTree) {
+    // The wide nodes must be the binary tree regrouped: every occupied slot's planes equal its
+    // path's planes, empty leaves have no slot, every non-empty leaf is reached exactly once.
+    // checkInvariants() runs checkKdWideTree in every test above; here it must also see damage.
+    SceneGeometry g;
+    g.meshes.push_back(makeUvSphereMesh(Vec3f(0), 1.f, 40, 80, 0));
+    KdTreeAccel kd(g, AccelOptions{});
+    ASSERT_EQ(kd.checkInvariants(), "");
+    const std::vector<KdWideNode>& wide = kd.wideNodes();
+    const KdBuildStats& st = kd.buildStats();
+    ASSERT_GT(st.emptyLeaves, 0u);
+    // Slots: one per non-empty leaf plus one per inner child below a treelet (every wide node but
+    // the root); no binary level is lost, and three of them collapse into one node.
+    size_t slots = 0;
+    for (const KdWideNode& n : wide) slots += size_t(__builtin_popcount(n.slotMask()));
+    EXPECT_EQ(slots, st.leaves - st.emptyLeaves + wide.size() - 1);
+    EXPECT_LT(wide.size(), st.innerNodes / 2);
+
+    // Rebuild the per-binary-leaf references the check compares with, from the accel's own tree.
+    std::vector<uint32_t> leafRefs(kd.nodes().size(), kKdNoLeaf);
+    const std::vector<KdNode>& bin = kd.nodes();
+    {
+        // Walk wide and binary trees together (slot s at depth 3 or at a leaf) to collect refs.
+        std::vector<std::pair<uint32_t, uint32_t>> todo{{0u, 0u}};
+        while (!todo.empty()) {
+            auto [w, b0] = todo.back();
+            todo.pop_back();
+            for (int slot = 0; slot < 8; ++slot) {
+                uint32_t b = b0;
+                int depth = 0;
+                for (; depth < 3 && !bin[b].isLeaf(); ++depth) b = (slot >> (2 - depth) & 1) ? bin[b].aboveChild() : b + 1;
+                if (!(wide[w].slotMask() >> slot & 1)) continue;
+                if (bin[b].isLeaf()) leafRefs[b] = wide[w].child[slot];
+                else todo.push_back({wide[w].child[slot] / uint32_t(sizeof(KdWideNode)), b});
+            }
+        }
+    }
+    ASSERT_EQ(checkKdWideTree(wide, bin, leafRefs), "");
+    // A split one ulp off, an axis changed, an empty leaf given a slot, a leaf's slot dropped, a
+    // missing plane that is not NaN: each must be reported.
+    auto damaged = [&](auto&& damage) {
+        std::vector<KdWideNode> copy = wide;
+        damage(copy);
+        return checkKdWideTree(copy, bin, leafRefs);
+    };
+    EXPECT_NE(damaged([](auto& c) { c[0].split[0] = std::nextafter(c[0].split[0], kInfinity); }), "");
+    EXPECT_NE(damaged([](auto& c) { c[0].meta ^= 1u; }), "");
+    EXPECT_NE(damaged([](auto& c) {
+                  for (KdWideNode& n : c)
+                      for (int s = 0; s < 8; ++s)
+                          if (!(n.slotMask() >> s & 1) && !std::isnan(n.split[3 + s / 2])) {
+                              n.meta |= 1u << (KdWideNode::kSlotShift + s);
+                              n.child[s] = kKdLeafBit;
+                              return;
+                          }
+              }),
+              "");
+    EXPECT_NE(damaged([](auto& c) {
+                  for (KdWideNode& n : c)
+                      for (int s = 0; s < 8; ++s)
+                          if ((n.slotMask() >> s & 1) && (n.child[s] & kKdLeafBit)) {
+                              n.meta &= ~(1u << (KdWideNode::kSlotShift + s));
+                              return;
+                          }
+              }),
+              "");
+    EXPECT_NE(damaged([](auto& c) {
+                  for (KdWideNode& n : c)
+                      for (int p = 0; p < 7; ++p)
+                          if (std::isnan(n.split[p])) {
+                              n.split[p] = 0.f;
+                              return;
+                          }
+              }),
+              "");
+}
+
+TEST(KdTree, RaysAlongSplitPlanesAndThroughCellCorners) {
+    // Rays whose origin lies exactly in split planes with a zero direction component there (the
+    // plane distance is 0·inf = NaN: both sides must be visited), with either sign of zero, and
+    // rays through the grid vertices where four cells meet (entered only thanks to the padding),
+    // in both kernels and both builds, against brute force.
+    SceneGeometry g = coplanarGrid();
+    TriangleMesh walls;  // axis-aligned quads in x = k/8 planes, which the tree splits at
+    for (int k = 0; k <= 8; ++k) {
+        float x = float(k) / 8.f;
+        addTriangle(walls, Vec3f(x, 0, 0.1f), Vec3f(x, 1, 0.1f), Vec3f(x, 0, 0.9f));
+        addTriangle(walls, Vec3f(x, 1, 0.1f), Vec3f(x, 1, 0.9f), Vec3f(x, 0, 0.9f));
+    }
+    g.meshes.push_back(walls);
+    KdTreeAccel fast(g, AccelOptions{}), portable(g, AccelOptions{});
+    portable.forcePortableKernels();
+    ASSERT_EQ(fast.checkInvariants(), "");
+    auto brute = createAccel("brute", g);
+    std::vector<Ray> rays;
+    for (int i = 0; i <= 40; ++i)
+        for (int j = 0; j <= 40; j += 5) {
+            float u = float(i) / 40.f, v = float(j) / 40.f;
+            for (float zero : {0.f, -0.f}) {
+                rays.push_back({Vec3f(u, v, 2.f), Vec3f(zero, zero, -1.f)});                  // down through grid vertices
+                rays.push_back({Vec3f(u, v, 0.5f), Vec3f(zero, 1.f, zero)});                  // along x = u and z = 0.5
+                rays.push_back({Vec3f(-1.f, v, 0.f), Vec3f(1.f, zero, zero)});                // in the grid's plane
+                rays.push_back({Vec3f(u, -1.f, 0.f), Vec3f(zero, 1.f, zero)});                // in the grid's plane
+                rays.push_back({Vec3f(u + 1e-7f, v, 2.f), Vec3f(zero, 1e-3f, -1.f)});        // grazing a vertex
+            }
+        }
+    size_t hits = 0;
+    for (const Ray& r : rays) {
+        Hit want, a, b;
+        bool hw = brute->intersect(r, want), ha = fast.intersect(r, a), hb = portable.intersect(r, b);
+        ASSERT_EQ(ha, hw) << "o " << r.o.x << " " << r.o.y << " " << r.o.z << " d " << r.d.x << " " << r.d.y << " " << r.d.z;
+        ASSERT_EQ(hb, hw);
+        EXPECT_EQ(fast.occluded(r), hw);
+        EXPECT_EQ(portable.occluded(r), hw);
+        if (!hw) continue;
+        ++hits;
+        EXPECT_EQ(a.t, want.t);
+        EXPECT_EQ(b.t, want.t);
+        EXPECT_EQ(a.primId, b.primId);
+    }
+    EXPECT_GT(hits, rays.size() / 3);  // rays in the grid's plane hit nothing (edge-on triangles)
 }
 
 TEST(KdTree, DegenerateRaysAndClippedRanges) {

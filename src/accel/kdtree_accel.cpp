@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace tessera {
 
@@ -67,21 +68,32 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
     if (!std::isfinite(sceneMagnitude_)) sceneMagnitude_ = 0.f;
     buildStats_ = tree.stats;
 
-    // Leaves become blocks of kLanes triangles (or a scalar list when a sphere is among them).
-    nodes_ = tree.nodes;
-    triangles_.reserve(tree.primIndices.size() / 2 + 1);
-    for (KdNode& node : nodes_) {
+    // Leaves become blocks of kLanes triangles (or a scalar list when a sphere is among them), and
+    // their references the slots of the wide nodes.
+    nodes_ = std::move(tree.nodes);
+    primIndices_ = std::move(tree.primIndices);
+    leafRefs_.assign(nodes_.size(), kKdNoLeaf);
+    triangles_.reserve(primIndices_.size() / 2 + 1);
+    auto tableRef = [&](KdLeafRecord rec) {
+        if (leafTable_.size() >= kKdRefIndexLimit) throw std::runtime_error("kdtree: more than 2^26 large leaves");
+        leafTable_.push_back(rec);
+        return kKdLeafBit | uint32_t(leafTable_.size() - 1) << 6;
+    };
+    for (size_t i = 0; i < nodes_.size(); ++i) {
+        const KdNode& node = nodes_[i];
         if (!node.isLeaf()) continue;
         uint32_t first = node.word0, count = node.word1 >> 2;
+        if (count == 0) continue;  // empty: no slot in the wide nodes
         bool allTriangles = true;
-        for (uint32_t k = 0; k < count; ++k) allTriangles &= prims_[tree.primIndices[first + k]].geomId != geometry_.sphereGeomId();
+        for (uint32_t k = 0; k < count; ++k) allTriangles &= prims_[primIndices_[first + k]].geomId != geometry_.sphereGeomId();
         if (!allTriangles) {
-            node = KdNode::leaf(uint32_t(mixedPrims_.size()), count << 1 | kMixedFlag);
-            for (uint32_t k = 0; k < count; ++k) mixedPrims_.push_back(prims_[tree.primIndices[first + k]]);
+            leafRefs_[i] = tableRef({uint32_t(mixedPrims_.size()), count << 1 | kMixedFlag});
+            for (uint32_t k = 0; k < count; ++k) mixedPrims_.push_back(prims_[primIndices_[first + k]]);
             continue;
         }
-        uint32_t blocks = (count + kLanes - 1) / kLanes;
-        node = KdNode::leaf(uint32_t(triangles_.size()), blocks << 1);
+        uint32_t blocks = (count + kLanes - 1) / kLanes, firstBlock = uint32_t(triangles_.size());
+        leafRefs_[i] = blocks <= kKdMaxInlineBlocks && firstBlock < kKdRefIndexLimit ? kKdLeafBit | blocks << 2 | firstBlock << 6
+                                                                                      : tableRef({firstBlock, blocks << 1});
         for (uint32_t b = 0; b < blocks; ++b) {
             TriangleBlock& t4 = triangles_.emplace_back();
             for (int lane = 0; lane < kLanes; ++lane) {
@@ -92,7 +104,7 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
                     blockIds_.push_back({kInvalidId, kInvalidId});
                     continue;
                 }
-                PrimRef ref = prims_[tree.primIndices[first + k]];
+                PrimRef ref = prims_[primIndices_[first + k]];
                 const TriangleMesh& mesh = geometry_.meshes[ref.geomId];
                 const glm::uvec3& tri = mesh.triangles[ref.primId];
                 for (int v = 0; v < 3; ++v)
@@ -103,12 +115,13 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
     }
     triangles_.shrink_to_fit();
     blockIds_.shrink_to_fit();
-    builderNodes_ = std::move(tree.nodes);
-    primIndices_ = std::move(tree.primIndices);
+    wide_ = collapseKdTree(nodes_, leafRefs_);
 
     stats_.primitives = total;
-    stats_.memoryBytes = nodes_.size() * sizeof(KdNode) + triangles_.size() * sizeof(TriangleBlock) +
-                         blockIds_.size() * sizeof(PrimRef) +
+    // What the traversal reads: wide nodes, leaf table and leaf blocks (the binary nodes are kept
+    // for the invariant checks only).
+    stats_.memoryBytes = wide_.size() * sizeof(KdWideNode) + leafTable_.size() * sizeof(KdLeafRecord) +
+                         triangles_.size() * sizeof(TriangleBlock) + blockIds_.size() * sizeof(PrimRef) +
                          mixedPrims_.size() * sizeof(PrimRef);
     stats_.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -120,6 +133,8 @@ uint64_t KdTreeAccel::structureHash() const {
         for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 0x100000001b3ULL;
     };
     add(nodes_.data(), nodes_.size() * sizeof(KdNode));
+    add(wide_.data(), wide_.size() * sizeof(KdWideNode));
+    add(leafTable_.data(), leafTable_.size() * sizeof(KdLeafRecord));
     add(triangles_.data(), triangles_.size() * sizeof(TriangleBlock));
     add(blockIds_.data(), blockIds_.size() * sizeof(PrimRef));
     add(mixedPrims_.data(), mixedPrims_.size() * sizeof(PrimRef));
@@ -155,15 +170,24 @@ std::string KdTreeAccel::checkInvariants() const {
             todo.push_back({n.aboveChild(), above, it.depth + 1});
             continue;
         }
-        const KdNode& b = builderNodes_[it.node];
-        uint32_t first = b.word0, count = b.word1 >> 2;
-        for (uint32_t k = 0; k < count; ++k) {
-            PrimRef want = prims_[primIndices_[first + k]], got;
-            if (n.word1 >> 2 & kMixedFlag) got = mixedPrims_[n.word0 + k];
-            else got = blockIds_[size_t(n.word0) * kLanes + k];
+        uint32_t first = n.word0, count = n.word1 >> 2;
+        if (count == 0) {
+            if (leafRefs_[it.node] != kKdNoLeaf) return "empty leaf " + std::to_string(it.node) + " has a reference";
+            continue;
+        }
+        if (leafRefs_[it.node] == kKdNoLeaf || !(leafRefs_[it.node] & kKdLeafBit)) return "leaf " + std::to_string(it.node) + " has no leaf reference";
+        LeafSpan span = leafSpan(leafRefs_[it.node]);
+        uint32_t capacity = span.mixed ? span.count : span.count * kLanes;
+        if (count > capacity || (!span.mixed && count <= capacity - kLanes)) return "leaf " + std::to_string(it.node) + " has the wrong number of blocks";
+        for (uint32_t k = 0; k < capacity; ++k) {
+            PrimRef want = k < count ? prims_[primIndices_[first + k]] : PrimRef{kInvalidId, kInvalidId}, got;
+            if (span.mixed) got = mixedPrims_[span.first + k];
+            else got = blockIds_[size_t(span.first) * kLanes + k];
             if (want.geomId != got.geomId || want.primId != got.primId) return "leaf block differs from the builder's leaf";
         }
     }
+    // 1b. The wide nodes: exactly the binary tree's cells and non-empty leaves.
+    if (std::string problem = checkKdWideTree(wide_, nodes_, leafRefs_); !problem.empty()) return problem;
     // 2. Completeness: descend with each triangle clipped to the cell; every leaf whose cell the
     //    clipped triangle enters with positive extent across the splits must reference it.
     for (uint32_t prim = 0; prim < prims_.size(); ++prim) {
@@ -178,7 +202,7 @@ std::string KdTreeAccel::checkInvariants() const {
             stack.pop_back();
             Vec3d lo, hi;
             if (!clipTriangleDouble(p0, p1, p2, cell, lo, hi)) continue;
-            const KdNode& n = builderNodes_[index];
+            const KdNode& n = nodes_[index];
             if (n.isLeaf()) {
                 auto begin = primIndices_.begin() + n.word0, end = begin + (n.word1 >> 2);
                 if (!std::binary_search(begin, end, prim))

@@ -1,14 +1,17 @@
 #pragma once
 /// \file kdtree_accel.h
 /// Tessera's SAH k-d tree (`--accel kdtree`): built in O(N log N) with perfect splits
-/// (kdtree_builder.h, Wald & Havran 2006), 8-byte nodes, front-to-back stack traversal with early
-/// exit and separate closest-hit / any-hit kernels (kdtree_traversal.cpp), leaves of 8-wide SIMD
-/// watertight triangle blocks (triangle_simd.h). Triangles and spheres; hit records in Embree's convention (accel.h).
+/// (kdtree_builder.h, Wald & Havran 2006) into 8-byte binary nodes, then collapsed into one-cache-line
+/// treelets of up to three levels (kdtree_wide.h) that the front-to-back stack traversal decides in
+/// one 8-lane step, with early exit and separate closest-hit / any-hit kernels
+/// (kdtree_traversal.cpp); leaves of 8-wide SIMD watertight triangle blocks (triangle_simd.h).
+/// Triangles and spheres; hit records in Embree's convention (accel.h).
 #include <string>
 #include <vector>
 
 #include "accel/accel.h"
 #include "accel/kdtree_builder.h"
+#include "accel/kdtree_wide.h"
 #include "geometry/clip.h"
 
 namespace tessera {
@@ -30,12 +33,15 @@ public:
     void forcePortableKernels() { useAvx2_ = false; }
     const KdBuildStats& buildStats() const { return buildStats_; }
     size_t nodeCount() const { return nodes_.size(); }
-    /// The nodes (leaf payloads rewritten to leaf blocks, see kMixedFlag); node 0 is the root.
+    /// The builder's binary nodes (leaf payloads index its references); node 0 is the root.
     const std::vector<KdNode>& nodes() const { return nodes_; }
+    /// The wide nodes the traversal runs on (the binary tree collapsed, kdtree_wide.h).
+    const std::vector<KdWideNode>& wideNodes() const { return wide_; }
     /// Checks the tree (Tungsten-style): split planes strictly inside their cells, depth within the
-    /// limit, leaf blocks equal to the builder's references, and completeness: every primitive is
-    /// referenced by every leaf whose cell its exact clipped extent enters (checked by descending
-    /// with the primitive clipped to each cell in double precision). Returns "" or the first problem.
+    /// limit, leaf blocks equal to the builder's references, wide nodes describing exactly the binary
+    /// tree's cells (checkKdWideTree), and completeness: every primitive is referenced by every leaf
+    /// whose cell its exact clipped extent enters (checked by descending with the primitive clipped
+    /// to each cell in double precision). Returns "" or the first problem.
     std::string checkInvariants() const;
     /// FNV-1a hash of nodes and leaves: equal for equal trees (determinism tests).
     uint64_t structureHash() const;
@@ -52,12 +58,24 @@ public:
     struct PrimRef {
         uint32_t geomId, primId;
     };
-    /// Leaf payload (KdNode::leaf): word0 = first TriangleBlock, or first mixedPrims_ entry when
-    /// the leaf holds a sphere; payload = count << 1 | mixed.
+    /// Leaf payload (KdLeafRecord::payload): count << 1 | mixed; mixed leaves (holding a sphere)
+    /// list mixedPrims_ entries, the others TriangleBlocks.
     static constexpr uint32_t kMixedFlag = 1u;
 
 private:
-    template <bool kAnyHit> bool traverse(const Ray& ray, Hit* hit) const;
+    struct LeafSpan {
+        uint32_t first, count;
+        bool mixed;
+    };
+    /// Decodes a wide node's leaf reference (layout at kKdLeafBit, kdtree_wide.h).
+    LeafSpan leafSpan(uint32_t ref) const {
+        uint32_t count = ref >> 2 & 15u, first = ref >> 6;
+        if (count) return {first, count, false};
+        KdLeafRecord rec = leafTable_[first];
+        return {rec.first, rec.payload >> 1, bool(rec.payload & kMixedFlag)};
+    }
+    template <bool kAvx> bool intersectImpl(const Ray& ray, Hit& hit) const;
+    template <bool kAvx> bool occludedImpl(const Ray& ray) const;
     // The same traversal compiled for AVX2 (one instruction per 8-lane leaf step); chosen at run
     // time, so the default build needs no -march=native.
     bool intersectAvx2(const Ray& ray, Hit& hit) const;
@@ -67,9 +85,11 @@ private:
     const SceneGeometry& geometry_;
     KdConfig config_;
     std::vector<PrimRef> prims_;        ///< build primitive index → (geomId, primId)
-    std::vector<KdNode> nodes_;
+    std::vector<KdNode> nodes_;         ///< the builder's binary nodes (leaf ranges into primIndices_)
     std::vector<uint32_t> primIndices_; ///< the builder's leaf references (invariant checks)
-    std::vector<KdNode> builderNodes_;  ///< the builder's nodes (leaf ranges into primIndices_)
+    std::vector<uint32_t> leafRefs_;    ///< per binary node: its wide-node leaf reference, or kKdNoLeaf
+    std::vector<KdWideNode> wide_;
+    std::vector<KdLeafRecord> leafTable_;  ///< leaves a reference cannot describe inline
     std::vector<TriangleBlock> triangles_;
     std::vector<PrimRef> blockIds_;     ///< kLanes per block: the lanes' (geomId, primId)
     std::vector<PrimRef> mixedPrims_;

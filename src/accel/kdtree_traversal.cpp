@@ -1,11 +1,15 @@
 /// \file kdtree_traversal.cpp
-/// Front-to-back stack traversal of the k-d tree (Havran's "TA_B^rec" family as in pbrt-v3 and
-/// Wald's thesis, Section 7.2): per node, one plane distance decides whether the ray's segment
-/// [tMin, tMax] visits the near child, the far child or both; the far part is pushed. The closest-hit
-/// kernel stops as soon as a hit lies inside the current leaf's segment (nothing behind can be
-/// closer); the any-hit kernel stops at the first hit.
+/// Front-to-back stack traversal of the k-d tree's wide nodes (kdtree_wide.h): Havran's
+/// "TA_B^rec" family (Havran 2000, thesis Section 4; pbrt-v3; Wald's thesis Section 7.2) with the
+/// three binary levels of a treelet decided in one 8-lane step. Each lane (a slot: up to three
+/// planes with a side each) clips the current segment; the entered slots are visited in the binary
+/// traversal's near-first order (closest-hit) or in any order (any-hit), the others pushed. The
+/// closest-hit kernel drops every pushed segment that starts beyond its hit; the any-hit kernel
+/// stops at the first hit.
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "accel/bvh_simd.h"
 #include "accel/mixed_leaf.h"
@@ -33,41 +37,188 @@ inline float twoUlpsLarger(float x) {
 /// t + 4 ulps, for comparisons of two computed distances along the same ray.
 inline float padUp(float t) { return t + std::abs(t) * 0x1p-21f; }
 
-struct StackEntry {
-    uint32_t node;
+/// A wide node's (and the traversal's) depth is a third of the binary depth; each level pushes at
+/// most 7 entries.
+constexpr int kStackSize = 7 * (kKdMaxDepth / 3 + 1) + 1;
+
+
+/// Lane i takes lane idx[i] mod 8 (only the low three bits count: vpermps / vpermd inside the AVX2
+/// build; GCC lowers it lane by lane elsewhere, with the same bits).
+TESSERA_INLINE Vf8 permute8(Vf8 v, Vi8 idx) {
+#if defined(__clang__)
+    Vf8 r;
+    for (int i = 0; i < 8; ++i) r[i] = v[idx[i] & 7];
+    return r;
+#else
+    return __builtin_shuffle(v, idx);
+#endif
+}
+TESSERA_INLINE Vi8 permute8(Vi8 v, Vi8 idx) {
+#if defined(__clang__)
+    Vi8 r;
+    for (int i = 0; i < 8; ++i) r[i] = v[idx[i] & 7];
+    return r;
+#else
+    return __builtin_shuffle(v, idx);
+#endif
+}
+
+// Slot s (lane s) applies, at level l, plane p = (1 << l) − 1 + (s >> (3 − l)) from the side given
+// by bit 2 − l of s (kdtree_wide.h); the meta word holds that plane's axis in bits 3p..3p+1.
+const Vi8 kLevelPlane[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {1, 1, 1, 1, 2, 2, 2, 2}, {3, 3, 4, 4, 5, 5, 6, 6}};
+const Vi8 kLevelAxisShift[3] = {{0, 0, 0, 0, 0, 0, 0, 0}, {3, 3, 3, 3, 6, 6, 6, 6}, {9, 9, 12, 12, 15, 15, 18, 18}};
+/// 4 where the slot lies above its level-l plane: the side half of a WideRay table index.
+const Vi8 kLevelSide[3] = {{0, 0, 0, 0, 4, 4, 4, 4}, {0, 0, 4, 4, 0, 0, 4, 4}, {0, 4, 0, 4, 0, 4, 0, 4}};
+
+/// All lanes x: one vbroadcastss in the AVX2 build (GCC turned both `Vf8{} + x`, an addition of 0
+/// in the latency chain, and `Vf8{x, x, ...}` into longer sequences).
+template <bool kAvx>
+TESSERA_INLINE Vf8 broadcast8(float x) {
+#if defined(TESSERA_X86)
+    if constexpr (kAvx) {
+        Vf8 r;
+        asm("vbroadcastss %1, %0" : "=x"(r) : "xm"(x));  // from memory when x is there: no ALU port
+        return r;
+    }
+#endif
+    return Vf8{x, x, x, x, x, x, x, x};
+}
+
+/// The node's meta word in all lanes: one vpbroadcastd from memory in the AVX2 build (GCC went
+/// through a general register, two more shuffle-port instructions).
+template <bool kAvx>
+TESSERA_INLINE Vi8 broadcastMeta(const KdWideNode& n) {
+#if defined(TESSERA_X86)
+    if constexpr (kAvx) {
+        Vi8 r;
+        asm("vpbroadcastd %1, %0" : "=x"(r) : "m"(n.meta));
+        return r;
+    }
+#endif
+    return Vi8{} + int32_t(n.meta);
+}
+
+/// The part of the ray inside a cell, its bounds padded by eps at every plane on the path.
+struct Segment {
     float tMin, tMax;
 };
 
-using Candidate = TriangleCandidate;
+/// Per-ray tables of the wide-node test, indexed by axis + 4·side (side 1: the slot lies above the
+/// plane), permuted into the slot lanes by each level's (axis, side).
+struct WideRay {
+    Vf8 inv;  ///< 1/d (the same for both sides)
+    /// The origin moved by eps along the axis so that (split − o')·(1/d) is the plane distance
+    /// padded by eps·|1/d| in the direction that widens the slot's cell: towards the origin where
+    /// the plane is the slot's entry (slot on the far side), away from it where it is the exit.
+    /// Moving the origin instead of padding the distance costs nothing per node. `orgEntry` holds
+    /// it where the plane bounds the slot's entry (far side) and NaN where it does not (near side),
+    /// `orgExit` the other way round: the distance of the bound that does not apply is then a NaN,
+    /// which the NaN-ignoring max/min skip.
+    Vf8 orgEntry, orgExit;
+    uint32_t downBits = 0;  ///< bit a set when the ray moves downward on axis a
 
-}  // namespace
+    /// The slot's rank in the binary traversal's near-first order: bit 2 − l set when the slot lies
+    /// on the far side of its level-l plane, i.e. its side bit flipped when the ray moves downward
+    /// on that plane's axis. Distinct among a node's occupied slots (their paths part at a plane
+    /// that both have), so sorting by it is the binary depth-first near-first order, also for
+    /// padded or NaN decisions.
+    uint32_t nearFirstKey(const KdWideNode& n, int slot) const {
+        const auto down = [&](int plane) { return downBits >> n.axis(plane) & 1u; };
+        return uint32_t(slot) ^ (down(0) << 2 | down(1 + (slot >> 2)) << 1 | down(3 + (slot >> 1)));
+    }
 
-template <bool kAnyHit>
-TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
-    if (nodes_.empty() || !isTraceableRay(ray)) return false;
+    /// eps: the traversal's padding; upward[a]: the ray moves up on axis a (from the sign of 1/d).
+    WideRay() = default;
+    WideRay(const Ray& ray, const Vec3f& invD, const bool (&upward)[3], float eps) : inv{}, orgEntry{}, orgExit{} {
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        for (int side = 0; side < 2; ++side)
+            for (int a = 0; a < 3; ++a) {
+                int i = a + 4 * side;
+                // Below the plane is the near side of a ray moving up.
+                bool near = side == 0 ? upward[a] : !upward[a];
+                inv[i] = invD[a];
+                // Far side: entry t − eps·|1/d| = (split − (o + eps·sign d))/d; near side: exit t + eps·|1/d|.
+                float moved = (near == upward[a]) ? ray.o[a] - eps : ray.o[a] + eps;
+                orgEntry[i] = near ? nan : moved;
+                orgExit[i] = near ? moved : nan;
+                downBits |= upward[a] ? 0u : 1u << a;
+            }
+    }
+};
+
+/// The slots of a wide node that the segment `seg` enters, as a bit mask, and their segments
+/// (`entry`, `exit`). For each slot (lane) and level, the plane distance t = (split − o)·(1/d) (the
+/// split permuted into the slot lanes by level, origin and 1/d by the plane's axis and the slot's
+/// side) bounds the segment from one side: a slot on the near side of the plane (below it for a ray
+/// moving up, above it for one moving down) keeps [−inf, t], one on the far side [t, +inf]; the
+/// slot's segment is the intersection (max of the entries, min of the exits). The bound that does
+/// not apply is a NaN (WideRay::orgEntry/orgExit) and skipped by the NaN-ignoring max/min (the first
+/// operand, chained on a non-NaN accumulator); so is a level without a plane (NaN split) and the 0·inf of an origin in
+/// the plane of a zero direction component (both sides visited, as in the binary traversal).
+/// Robustness: every plane is moved by eps to widen the slot's cell (a cell is visited if the ray
+/// passes within eps of it, see startRay), and the segments carried down are these padded ones.
+/// Every pair of planes on a path is thus compared padded against padded, which visits a superset
+/// of the binary traversal's cells (that compared each padded plane with the exact bounds of the
+/// planes above it). Comparing with the exact segment from above instead is not: a cell entered
+/// only thanks to the padding has an inverted exact segment, and none of its children would pass.
+template <bool kAvx>
+TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const Segment& seg, Vf8& entry, Vf8& exit) {
+    const Vf8 planes = load8(n.split);  // lane 7 holds the meta word (a normal float), never used
+    const Vi8 meta = broadcastMeta<kAvx>(n);
+    Vf8 eP = broadcast8<kAvx>(seg.tMin), xP = broadcast8<kAvx>(seg.tMax);
+    for (int l = 0; l < 3; ++l) {
+        // axis + 4·side in the low three bits (the only ones a permute reads; bit 2 of the shifted
+        // meta is clear).
+        const Vi8 index = (meta >> kLevelAxisShift[l]) | kLevelSide[l];
+        // Level 0's one plane straight from memory (a load, no shuffle).
+        const Vf8 split = l == 0 ? broadcast8<kAvx>(n.split[0]) : permute8(planes, kLevelPlane[l]);
+        const Vf8 inv = permute8(r.inv, index);
+        eP = maxNanB((split - permute8(r.orgEntry, index)) * inv, eP);
+        xP = minNanB((split - permute8(r.orgExit, index)) * inv, xP);
+    }
+    entry = eP, exit = xP;
+    return moveMask8Isa<kAvx>(eP <= xP) & n.slotMask();
+}
+
+/// For each 8-bit lane mask, its set lanes packed from the low nibble up (4 bits each): the
+/// permutation that moves the entered slots to the front of a vector.
+constexpr auto kCompactLanes = [] {
+    std::array<uint32_t, 256> t{};
+    for (uint32_t m = 0; m < 256; ++m) {
+        uint32_t packed = 0, n = 0;
+        for (uint32_t i = 0; i < 8; ++i)
+            if (m >> i & 1) packed |= i << (4 * n++);
+        t[m] = packed;
+    }
+    return t;
+}();
+const Vi8 kNibbleShift = {0, 4, 8, 12, 16, 20, 24, 28};
+
+TESSERA_INLINE Vi8 load8i(const uint32_t* p) {
+    Vi8 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+TESSERA_INLINE void store8(void* p, Vf8 v) { std::memcpy(p, &v, sizeof v); }
+TESSERA_INLINE void store8(void* p, Vi8 v) { std::memcpy(p, &v, sizeof v); }
+
+/// Per-ray set-up shared by both kernels: the wide-node tables and the ray clipped to the root cell.
+/// Returns false when the ray misses the root cell (or cannot be traced). `sceneMagnitude`: the
+/// largest |coordinate| of the root cell.
+TESSERA_INLINE bool startRay(const Ray& ray, const Bounds3f& rootCell_, float sceneMagnitude_, WideRay& wideRay, Segment& seg) {
+    if (!isTraceableRay(ray)) return false;
     Vec3f invD;
     for (int a = 0; a < 3; ++a) invD[a] = 1.f / ray.d[a];  // ±inf for ±0.0
-
     // Robustness. Primitive boxes and perfect splits are exact, but the watertight test may report
     // a hit up to a few ulps of the coordinates' magnitude (relative to the ray origin) outside the
     // exact triangle. So the traversal visits every cell that the ray passes within `eps` of:
     // 16 ulps of the largest coordinate involved. Across a plane of axis a that is a distance of
     // eps·|1/d_a| along the ray (large for rays almost parallel to the plane), which pads each
-    // visit decision. Segment bounds stay unpadded, so the early exit stays exact.
+    // plane of every visit decision (enterSlots).
     const float eps = 0x1p-19f * (sceneMagnitude_ + maxComponent(glm::abs(ray.o)));
-    Vec3f padT;
     bool upward[3];
-    for (int a = 0; a < 3; ++a) {
-        padT[a] = ray.d[a] != 0.f ? eps * std::abs(invD[a]) : 0.f;
-        upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
-    }
-    // Per-axis values as plain arrays for the inner loop: glm's operator[] with a run-time index
-    // compiles to a switch, i.e. an unpredictable three-way branch on the axis at every node.
-    float orgA[4], invA[4], padA[4];
-    uint32_t downMask[4];
-    for (int a = 0; a < 3; ++a) orgA[a] = ray.o[a], invA[a] = invD[a], padA[a] = padT[a], downMask[a] = upward[a] ? 0u : ~0u;
-    orgA[3] = invA[3] = padA[3] = 0.f, downMask[3] = 0u;
-
+    for (int a = 0; a < 3; ++a) upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
+    wideRay = WideRay(ray, invD, upward, eps);
     // Clip the ray to the root cell grown by eps: conservative slabs (Ize 2013), NaN-safe operand
     // order (a 0·inf NaN, from an origin on a slab plane of a zero direction component, leaves the
     // interval alone).
@@ -80,103 +231,177 @@ TESSERA_INLINE bool KdTreeAccel::traverse(const Ray& ray, Hit* hit) const {
         tMin = tn > tMin ? tn : tMin;
         tMax = tf < tMax ? tf : tMax;
     }
-    if (!(tMin <= tMax)) return false;
+    seg = {tMin, tMax};
+    return tMin <= tMax;
+}
 
+}  // namespace
+
+/// The closest-hit kernel: entered slots visited in the binary traversal's near-first order, the
+/// others pushed. There is no separate early exit: once a hit is found, every pushed segment that
+/// starts beyond it is dropped when popped, and in near-first order that is everything behind the
+/// hit's cell. (An exact exit per segment, for the classic "hit inside this leaf" test, cost an
+/// extra permute, product and min per level in every node.)
+template <bool kAvx>
+TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
+    WideRay wideRay;
+    Segment seg;
+    if (wide_.empty() || !startRay(ray, rootCell_, sceneMagnitude_, wideRay, seg)) return false;
     TriRay8 triRay(ray);
-    float tHit = ray.tMax;  // closest hit so far (closest-hit kernel)
+    float tHit = ray.tMax;  // closest hit so far
     const TriangleBlock* bestBlock = nullptr;
     int bestLane = -1;
     MixedCandidate bestMixed;
     float bestU = 0.f, bestV = 0.f;
 
-    StackEntry stack[kKdMaxDepth + 4];
+    struct StackEntry {
+        uint32_t ref;
+        Segment seg;
+    };
+    StackEntry stack[kStackSize];
     int sp = 0;
-    uint32_t index = 0;
-    const KdNode* nodes = nodes_.data();
+    uint32_t ref = 0;  // the root wide node
+    const char* wideBase = reinterpret_cast<const char*>(wide_.data());
     while (true) {
-        const KdNode node = nodes[index];
-        if (!node.isLeaf()) {
-            // The above child lies far from this node in the depth-first layout; fetching it now
-            // overlaps its cache miss with this step (it is visited next, or pushed and popped).
-            __builtin_prefetch(nodes + node.aboveChild());
-            const int a = node.axis();
-            const float split = node.split();
-            const float tPlane = (split - orgA[a]) * invA[a];
-            // The ray is below the plane before tPlane when moving upward. NaN (origin in the plane,
-            // direction parallel to it) fails both tests below: both children are visited.
-            const uint32_t below = index + 1, above = node.aboveChild();
-            const uint32_t swap = (below ^ above) & downMask[a];
-            const uint32_t firstChild = below ^ swap, secondChild = above ^ swap;
-            const bool skipFirst = tMin > tPlane + padA[a];
-            const bool skipSecond = tPlane - padA[a] > tMax;
-            // Branch-free step (the three-way choice is a coin toss for incoherent rays): the far
-            // entry is always written and kept only when both children are visited.
-            const bool both = !skipFirst && !skipSecond;
-            stack[sp] = {secondChild, tPlane > tMin ? tPlane : tMin, tMax};
-            sp += both;
-            index = (skipFirst && !skipSecond) ? secondChild : firstChild;
-            tMax = (both && tPlane < tMax) ? tPlane : tMax;
-            continue;
-        }
-        // Leaf.
-        const uint32_t count = node.word1 >> 3;
-        if (!(node.word1 >> 2 & kMixedFlag)) {
-            const TriangleBlock* blocks = triangles_.data() + node.word0;
-            for (uint32_t b = 0; b < count; ++b) {
-                Candidate c = intersectTriangles<8, kAnyHit>(triRay, blocks[b].p, tHit);
-                if (c.lane < 0) continue;
-                if constexpr (kAnyHit) return true;
-                tHit = c.t, bestU = c.u, bestV = c.v;
-                bestBlock = &blocks[b], bestLane = c.lane;
+        if (!(ref & kKdLeafBit)) {
+            const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
+            Vf8 entry, exit;
+            uint32_t mask = enterSlots<kAvx>(node, wideRay, seg, entry, exit);
+            if (mask) {
+                int nearest;
+                if (!(mask & (mask - 1))) {  // one slot: no ordering needed
+                    nearest = __builtin_ctz(mask);
+                } else {
+                    // Near-first: the slots by key (distinct, < 8), the farthest pushed first.
+                    int slotOfKey[8];
+                    uint32_t byKey = 0;
+                    while (mask) {
+                        int i = __builtin_ctz(mask);
+                        mask &= mask - 1;
+                        uint32_t k = wideRay.nearFirstKey(node, i);
+                        slotOfKey[k] = i;
+                        byKey |= 1u << k;
+                    }
+                    nearest = slotOfKey[__builtin_ctz(byKey)];
+                    byKey &= byKey - 1;
+                    while (byKey) {
+                        int k = 31 - __builtin_clz(byKey);
+                        byKey ^= 1u << k;
+                        int i = slotOfKey[k];
+                        stack[sp++] = {node.child[i], {entry[i], exit[i]}};
+                    }
+                }
+                ref = node.child[nearest];
+                seg = {entry[nearest], exit[nearest]};
+                continue;
             }
-        } else if (intersectMixedLeaf<kAnyHit>(geometry_, ray, &mixedPrims_[node.word0], count, tHit, bestMixed)) {
-            if constexpr (kAnyHit) return true;
-            bestBlock = nullptr;
+        } else {
+            const LeafSpan leaf = leafSpan(ref);
+            if (!leaf.mixed) {
+                const TriangleBlock* blocks = triangles_.data() + leaf.first;
+                for (uint32_t b = 0; b < leaf.count; ++b) {
+                    TriangleCandidate c = intersectTriangles<8, false>(triRay, blocks[b].p, tHit);
+                    if (c.lane < 0) continue;
+                    tHit = c.t, bestU = c.u, bestV = c.v;
+                    bestBlock = &blocks[b], bestLane = c.lane;
+                }
+            } else if (intersectMixedLeaf<false>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, tHit, bestMixed)) {
+                bestBlock = nullptr;
+            }
         }
-        // Early exit: a hit inside this leaf's segment is closer than anything behind it.
-        if (tHit <= tMax && tHit < ray.tMax) break;
         // Next segment along the ray, unless the closest hit lies before it.
         do {
             if (sp == 0) goto done;
             --sp;
-        } while (stack[sp].tMin > padUp(tHit));
-        index = stack[sp].node;
-        tMin = stack[sp].tMin;
-        tMax = stack[sp].tMax;
+        } while (stack[sp].seg.tMin > padUp(tHit));
+        ref = stack[sp].ref;
+        seg = stack[sp].seg;
     }
 done:
-    if constexpr (kAnyHit) {
-        return false;
-    } else {
-        if (bestBlock) {
-            Vec3f p[3];
-            for (int v = 0; v < 3; ++v) p[v] = {bestBlock->p[v][0][bestLane], bestBlock->p[v][1][bestLane], bestBlock->p[v][2][bestLane]};
-            hit->t = tHit, hit->u = bestU, hit->v = bestV;
-            const PrimRef& id = blockIds_[size_t(bestBlock - triangles_.data()) * kLanes + size_t(bestLane)];
-            hit->geomId = id.geomId;
-            hit->primId = id.primId;
-            hit->ng = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
-            return true;
+    if (bestBlock) {
+        Vec3f p[3];
+        for (int v = 0; v < 3; ++v) p[v] = {bestBlock->p[v][0][bestLane], bestBlock->p[v][1][bestLane], bestBlock->p[v][2][bestLane]};
+        hit.t = tHit, hit.u = bestU, hit.v = bestV;
+        const PrimRef& id = blockIds_[size_t(bestBlock - triangles_.data()) * kLanes + size_t(bestLane)];
+        hit.geomId = id.geomId;
+        hit.primId = id.primId;
+        hit.ng = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
+        return true;
+    }
+    if (bestMixed.geomId != kInvalidId) {
+        mixedHitRecord(geometry_, ray, bestMixed, tHit, hit);
+        return true;
+    }
+    return false;
+}
+
+/// The any-hit kernel: no order among the entered slots, so a node's step needs no branch on how
+/// many it entered: all are pushed at once (compacted by a permutation from kCompactLanes, onto a
+/// stack of structure-of-arrays) and the top is popped.
+template <bool kAvx>
+TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
+    WideRay wideRay;
+    Segment seg;
+    if (wide_.empty() || !startRay(ray, rootCell_, sceneMagnitude_, wideRay, seg)) return false;
+    TriRay8 triRay(ray);
+    const float tHit = ray.tMax;
+
+    // 8 entries of slack: every push writes a whole vector.
+    alignas(32) uint32_t refs[kStackSize + 8];
+    alignas(32) float mins[kStackSize + 8], maxs[kStackSize + 8];
+    int sp = 0;
+    uint32_t ref = 0;
+    const char* wideBase = reinterpret_cast<const char*>(wide_.data());
+    while (true) {
+        if (!(ref & kKdLeafBit)) {
+            const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
+            Vf8 entry, exit;
+            uint32_t mask = enterSlots<kAvx>(node, wideRay, seg, entry, exit);
+            const Vi8 order = (Vi8{} + int32_t(kCompactLanes[mask])) >> kNibbleShift;  // permutes read 3 bits
+            store8(refs + sp, permute8(load8i(node.child), order));
+            store8(mins + sp, permute8(entry, order));
+            store8(maxs + sp, permute8(exit, order));
+            sp += __builtin_popcount(mask);
+            if (mask) {
+                // The top entry is the highest entered slot: its reference straight from the node
+                // (a load after a bit scan) rather than through the stack (table load, shuffles,
+                // store and reload between this node and the next one's address).
+                const int top = 31 - __builtin_clz(mask);
+                --sp;
+                ref = node.child[top];
+                seg = {mins[sp], maxs[sp]};
+                continue;
+            }
+        } else {
+            const LeafSpan leaf = leafSpan(ref);
+            if (!leaf.mixed) {
+                const TriangleBlock* blocks = triangles_.data() + leaf.first;
+                for (uint32_t b = 0; b < leaf.count; ++b)
+                    if (intersectTriangles<8, true>(triRay, blocks[b].p, tHit).lane >= 0) return true;
+            } else {
+                MixedCandidate unused;
+                float t = tHit;
+                if (intersectMixedLeaf<true>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, t, unused)) return true;
+            }
         }
-        if (bestMixed.geomId != kInvalidId) {
-            mixedHitRecord(geometry_, ray, bestMixed, tHit, *hit);
-            return true;
-        }
-        return false;
+        if (sp == 0) return false;
+        --sp;
+        ref = refs[sp];
+        seg = {mins[sp], maxs[sp]};
     }
 }
 
 #if defined(TESSERA_X86)
-__attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return traverse<false>(ray, &hit); }
-__attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return traverse<true>(ray, nullptr); }
+__attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true>(ray, hit); }
+__attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<true>(ray); }
 #else
-bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return traverse<false>(ray, &hit); }
-bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return traverse<true>(ray, nullptr); }
+bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<false>(ray, hit); }
+bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<false>(ray); }
 #endif
 
 bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const {
-    return useAvx2_ ? intersectAvx2(ray, hit) : traverse<false>(ray, &hit);
+    return useAvx2_ ? intersectAvx2(ray, hit) : intersectImpl<false>(ray, hit);
 }
-bool KdTreeAccel::occluded(const Ray& ray) const { return useAvx2_ ? occludedAvx2(ray) : traverse<true>(ray, nullptr); }
+bool KdTreeAccel::occluded(const Ray& ray) const { return useAvx2_ ? occludedAvx2(ray) : occludedImpl<false>(ray); }
 
 }  // namespace tessera
