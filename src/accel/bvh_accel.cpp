@@ -4,7 +4,6 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -48,26 +47,6 @@ struct StackEntry {
     uint32_t ref;
     float tNear;
 };
-
-/// For each 8-bit mask, the lanes of its set bits in ascending order, one per byte (vpermd indices
-/// that pack those lanes to the front).
-constexpr std::array<uint64_t, 256> makeCompactTable() {
-    std::array<uint64_t, 256> table{};
-    for (uint32_t mask = 0; mask < 256; ++mask) {
-        int n = 0;
-        for (int lane = 0; lane < 8; ++lane)
-            if (mask >> lane & 1) table[mask] |= uint64_t(lane) << (8 * n++);
-    }
-    return table;
-}
-constexpr std::array<uint64_t, 256> kCompactTable = makeCompactTable();
-
-TESSERA_INLINE Vi8 compactIndices(uint32_t mask) {
-    typedef uint8_t Vu8x8 __attribute__((vector_size(8)));
-    Vu8x8 bytes;
-    std::memcpy(&bytes, &kCompactTable[mask], sizeof bytes);
-    return __builtin_convertvector(bytes, Vi8);
-}
 
 /// Orders two entries farther first (ties keep their order), with selects instead of a branch.
 TESSERA_INLINE void farFirst(StackEntry& a, StackEntry& b) {
@@ -518,7 +497,7 @@ TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
                     // rays).
                     Vi8 kids;
                     std::memcpy(&kids, node.child, sizeof kids);
-                    Vi8 packed = __builtin_shuffle(kids, compactIndices(mask));
+                    Vi8 packed = permute8(kids, compactIndices(mask));
                     std::memcpy(&stack[sp], &packed, sizeof packed);
                     sp += __builtin_popcount(mask);
                     ref = node.child[first];

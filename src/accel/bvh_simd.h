@@ -4,6 +4,7 @@
 /// the same code compiles to SSE2 in the default build and to AVX2 inside functions marked
 /// `__attribute__((target("avx2")))` (the traversal is instantiated once per instruction set and
 /// chosen at run time, so the default build never needs -march=native).
+#include <array>
 #include <cstdint>
 #include <cstring>
 
@@ -83,6 +84,39 @@ TESSERA_INLINE uint32_t moveMask4(Vi4 m) {
     for (int i = 0; i < 4; ++i) bits |= uint32_t(m[i] < 0) << i;
     return bits;
 #endif
+}
+
+/// Lane i of the result takes lane idx[i] mod 8 of v (vpermps / vpermd inside AVX2 code; GCC
+/// lowers it lane by lane elsewhere, with the same result).
+template <class V>
+TESSERA_INLINE V permute8(V v, Vi8 idx) {
+#if defined(__clang__)
+    V r;
+    for (int i = 0; i < 8; ++i) r[i] = v[idx[i] & 7];
+    return r;
+#else
+    return __builtin_shuffle(v, idx);
+#endif
+}
+
+/// For each 8-bit lane mask, its set lanes packed from the low nibble up (4 bits each).
+constexpr std::array<uint32_t, 256> kCompactLanes = [] {
+    std::array<uint32_t, 256> t{};
+    for (uint32_t m = 0; m < 256; ++m) {
+        uint32_t packed = 0, n = 0;
+        for (uint32_t i = 0; i < 8; ++i)
+            if (m >> i & 1) packed |= i << (4 * n++);
+        t[m] = packed;
+    }
+    return t;
+}();
+
+/// permute8 indices that move the set lanes of `mask` to the front, in lane order (stream
+/// compaction of one node's hit children: one permute and one store push them all). Lanes past the
+/// count hold junk; permute8 reads only the low three bits of each index.
+TESSERA_INLINE Vi8 compactIndices(uint32_t mask) {
+    const Vi8 nibbleShift = {0, 4, 8, 12, 16, 20, 24, 28};
+    return (Vi8{} + int32_t(kCompactLanes[mask])) >> nibbleShift;
 }
 
 }  // namespace tessera::simd

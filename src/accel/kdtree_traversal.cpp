@@ -6,7 +6,6 @@
 /// traversal's near-first order (closest-hit) or in any order (any-hit), the others pushed. The
 /// closest-hit kernel drops every pushed segment that starts beyond its hit; the any-hit kernel
 /// stops at the first hit.
-#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -41,27 +40,6 @@ inline float padUp(float t) { return t + std::abs(t) * 0x1p-21f; }
 /// most 7 entries.
 constexpr int kStackSize = 7 * (kKdMaxDepth / 3 + 1) + 1;
 
-
-/// Lane i takes lane idx[i] mod 8 (only the low three bits count: vpermps / vpermd inside the AVX2
-/// build; GCC lowers it lane by lane elsewhere, with the same bits).
-TESSERA_INLINE Vf8 permute8(Vf8 v, Vi8 idx) {
-#if defined(__clang__)
-    Vf8 r;
-    for (int i = 0; i < 8; ++i) r[i] = v[idx[i] & 7];
-    return r;
-#else
-    return __builtin_shuffle(v, idx);
-#endif
-}
-TESSERA_INLINE Vi8 permute8(Vi8 v, Vi8 idx) {
-#if defined(__clang__)
-    Vi8 r;
-    for (int i = 0; i < 8; ++i) r[i] = v[idx[i] & 7];
-    return r;
-#else
-    return __builtin_shuffle(v, idx);
-#endif
-}
 
 // Slot s (lane s) applies, at level l, plane p = (1 << l) − 1 + (s >> (3 − l)) from the side given
 // by bit 2 − l of s (kdtree_wide.h); the meta word holds that plane's axis in bits 3p..3p+1.
@@ -179,20 +157,6 @@ TESSERA_INLINE uint32_t enterSlots(const KdWideNode& n, const WideRay& r, const 
     entry = eP, exit = xP;
     return moveMask8Isa<kAvx>(eP <= xP) & n.slotMask();
 }
-
-/// For each 8-bit lane mask, its set lanes packed from the low nibble up (4 bits each): the
-/// permutation that moves the entered slots to the front of a vector.
-constexpr auto kCompactLanes = [] {
-    std::array<uint32_t, 256> t{};
-    for (uint32_t m = 0; m < 256; ++m) {
-        uint32_t packed = 0, n = 0;
-        for (uint32_t i = 0; i < 8; ++i)
-            if (m >> i & 1) packed |= i << (4 * n++);
-        t[m] = packed;
-    }
-    return t;
-}();
-const Vi8 kNibbleShift = {0, 4, 8, 12, 16, 20, 24, 28};
 
 TESSERA_INLINE Vi8 load8i(const uint32_t* p) {
     Vi8 v;
@@ -336,7 +300,7 @@ done:
 }
 
 /// The any-hit kernel: no order among the entered slots, so a node's step needs no branch on how
-/// many it entered: all are pushed at once (compacted by a permutation from kCompactLanes, onto a
+/// many it entered: all are pushed at once (compacted by compactIndices, onto a
 /// stack of structure-of-arrays) and the top is popped.
 template <bool kAvx>
 TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
@@ -357,7 +321,7 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
             const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
             Vf8 entry, exit;
             uint32_t mask = enterSlots<kAvx>(node, wideRay, seg, entry, exit);
-            const Vi8 order = (Vi8{} + int32_t(kCompactLanes[mask])) >> kNibbleShift;  // permutes read 3 bits
+            const Vi8 order = compactIndices(mask);
             store8(refs + sp, permute8(load8i(node.child), order));
             store8(mins + sp, permute8(entry, order));
             store8(maxs + sp, permute8(exit, order));
