@@ -22,6 +22,7 @@ public:
 
     std::string_view name() const override { return "kdtree"; }
     bool intersect(const Ray& ray, Hit& hit) const override;
+    bool intersectCoherent(const Ray& ray, Hit& hit) const override;
     bool occluded(const Ray& ray) const override;
     Bounds3f bounds() const override { return bounds_; }
     AccelStats stats() const override { return stats_; }
@@ -74,11 +75,13 @@ private:
         KdLeafRecord rec = leafTable_[first];
         return {rec.first, rec.payload >> 1, bool(rec.payload & kMixedFlag)};
     }
-    template <bool kAvx> bool intersectImpl(const Ray& ray, Hit& hit) const;
+    /// kCoherent: branches on the entered-slot count (camera rays, intersectCoherent).
+    template <bool kAvx, bool kCoherent> bool intersectImpl(const Ray& ray, Hit& hit) const;
     template <bool kAvx> bool occludedImpl(const Ray& ray) const;
     // The same traversal compiled for AVX2 (one instruction per 8-lane leaf step); chosen at run
     // time, so the default build needs no -march=native.
     bool intersectAvx2(const Ray& ray, Hit& hit) const;
+    bool intersectCoherentAvx2(const Ray& ray, Hit& hit) const;
     bool occludedAvx2(const Ray& ray) const;
     bool useAvx2_ = false;
 

@@ -206,7 +206,7 @@ TESSERA_INLINE bool startRay(const Ray& ray, const Bounds3f& rootCell_, float sc
 /// starts beyond it is dropped when popped, and in near-first order that is everything behind the
 /// hit's cell. (An exact exit per segment, for the classic "hit inside this leaf" test, cost an
 /// extra permute, product and min per level in every node.)
-template <bool kAvx>
+template <bool kAvx, bool kCoherent>
 TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
     WideRay wideRay;
     Segment seg;
@@ -233,6 +233,22 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
             uint32_t mask = enterSlots<kAvx>(node, wideRay, seg, entry, exit);
             if (mask) {
                 int nearest;
+                if constexpr (!kCoherent) {
+                    // Incoherent rays (as in the BVH, §8b): one and two entered slots share one
+                    // branch-free path, the lowest and the highest slot (the same slot when alone,
+                    // and its push is then not kept); the order is the loops' below, so both
+                    // kernels return the same record.
+                    const int lo = __builtin_ctz(mask), hi = 31 - __builtin_clz(mask);
+                    if (!(mask & ~((1u << lo) | (1u << hi)))) {
+                        const bool swap = wideRay.nearFirstKey(node, hi) < wideRay.nearFirstKey(node, lo);
+                        const int near = swap ? hi : lo, far = swap ? lo : hi;
+                        stack[sp] = {node.child[far], {entry[far], exit[far]}};
+                        sp += lo != hi;
+                        ref = node.child[near];
+                        seg = {entry[near], exit[near]};
+                        continue;
+                    }
+                }
                 if (!(mask & (mask - 1))) {  // one slot: no ordering needed
                     nearest = __builtin_ctz(mask);
                 } else {
@@ -356,15 +372,20 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
 }
 
 #if defined(TESSERA_X86)
-__attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true>(ray, hit); }
+__attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true, false>(ray, hit); }
+__attribute__((target("avx2"))) bool KdTreeAccel::intersectCoherentAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true, true>(ray, hit); }
 __attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<true>(ray); }
 #else
-bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<false>(ray, hit); }
+bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<false, false>(ray, hit); }
+bool KdTreeAccel::intersectCoherentAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<false, true>(ray, hit); }
 bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<false>(ray); }
 #endif
 
 bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const {
-    return useAvx2_ ? intersectAvx2(ray, hit) : intersectImpl<false>(ray, hit);
+    return useAvx2_ ? intersectAvx2(ray, hit) : intersectImpl<false, false>(ray, hit);
+}
+bool KdTreeAccel::intersectCoherent(const Ray& ray, Hit& hit) const {
+    return useAvx2_ ? intersectCoherentAvx2(ray, hit) : intersectImpl<false, true>(ray, hit);
 }
 bool KdTreeAccel::occluded(const Ray& ray) const { return useAvx2_ ? occludedAvx2(ray) : occludedImpl<false>(ray); }
 
