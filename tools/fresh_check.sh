@@ -1,0 +1,118 @@
+#!/usr/bin/env bash
+# Proves the README's two set-up commands on a machine that has never seen the project: a minimal
+# Debian 12 root file system (`mmdebstrap --variant=apt bookworm`: essential packages and apt,
+# nothing else), the committed tree (`git archive HEAD`) copied into it, then inside it, as a new
+# user would type them:
+#     tools/render.sh     (installs what is missing, builds, renders the Cornell box)
+#     tools/test.sh       (installs what is missing, builds, fetches the test meshes, runs every test)
+# Prints the time of each step and fails loudly naming the step that broke (exit 1).
+#
+#   tools/fresh_check.sh [--keep] [--no-cache]
+#     --keep       keep the root file system (its path is printed) instead of deleting it
+#     --no-cache   bootstrap a new root file system even when today's is cached
+#
+# Only the bootstrap tarball is cached (one a day, in $TESSERA_CACHE or ~/.cache/tessera/fresh-check):
+# it holds nothing of the project. The project's packages, build and test meshes are never cached.
+# Needs root (chroot, mounts; run inside `unshare --mount` so nothing stays mounted) and the
+# network to Debian's archive and the npm registry, as a new user's machine has.
+# Uncommitted changes are NOT checked: commit first (a warning says so).
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+keep=0; use_cache=1
+for a in "$@"; do
+  case "$a" in
+    --keep) keep=1 ;;
+    --no-cache) use_cache=0 ;;
+    *) echo "usage: tools/fresh_check.sh [--keep] [--no-cache]" >&2; exit 2 ;;
+  esac
+done
+[ "$(id -u)" -eq 0 ] || { echo "fresh_check: needs root (chroot and mounts)" >&2; exit 2; }
+
+t_start=$SECONDS
+step_name=""; step_t0=0
+declare -a report=()
+begin() { step_name="$1"; step_t0=$SECONDS; echo "== fresh_check: $1"; }
+end() { local dt=$((SECONDS - step_t0)); report+=("$(printf '%-44s %5d s' "$step_name" "$dt")"); echo "== fresh_check: $step_name: ${dt} s"; step_name=""; }
+on_exit() {
+  local rc=$?
+  if [ -n "$step_name" ] && [ $rc -ne 0 ]; then
+    echo "" >&2
+    echo "fresh_check: FAILED at step '$step_name' (exit $rc, after $((SECONDS - step_t0)) s)" >&2
+  fi
+  if [ -n "${rootfs:-}" ] && [ -d "$rootfs" ]; then
+    if [ $keep -eq 1 ]; then echo "fresh_check: root file system kept at $rootfs" >&2
+    else rm -rf --one-file-system "$rootfs"; fi
+  fi
+  exit $rc
+}
+trap on_exit EXIT
+
+begin "host packages (mmdebstrap)"
+bash "$root/tools/bootstrap.sh" --install fresh
+end
+
+if [ -n "$(git -C "$root" status --porcelain --untracked-files=no 2>/dev/null)" ]; then
+  echo "fresh_check: warning: uncommitted changes are not part of the check (it uses git archive HEAD)" >&2
+fi
+
+cache="${TESSERA_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/tessera}/fresh-check"
+mkdir -p "$cache"
+tarball="$cache/bookworm-apt-$(date -u +%Y%m%d).tar.zst"
+begin "bootstrap Debian 12 (mmdebstrap --variant=apt)"
+if [ $use_cache -eq 0 ] || [ ! -f "$tarball" ]; then
+  rm -f "$cache"/bookworm-apt-*.tar.zst "$cache"/*.part
+  mmdebstrap --quiet --variant=apt --mode=root bookworm "$tarball.part.tar.zst"
+  mv "$tarball.part.tar.zst" "$tarball"
+else
+  echo "fresh_check: today's bootstrap tarball is cached: $tarball"
+fi
+end
+
+begin "unpack root file system, copy git archive HEAD"
+rootfs="$(mktemp -d "${TMPDIR:-/var/tmp}/tessera-fresh.XXXXXX")"
+chmod 755 "$rootfs"
+tar --zstd -xf "$tarball" -C "$rootfs"
+cp -L /etc/resolv.conf "$rootfs/etc/resolv.conf" 2>/dev/null || true
+mkdir -p "$rootfs/root/tessera"
+git -C "$root" archive --format=tar HEAD | tar -xf - -C "$rootfs/root/tessera"
+echo "fresh_check: $(git -C "$root" rev-parse --short HEAD) in $rootfs/root/tessera"
+end
+
+# One command inside the root file system, in a private mount namespace (proc, sys and dev are
+# mounted there and vanish with it), with a new user's environment: no TESSERA_* variables, no
+# shared/ beside the checkout, HOME=/root.
+in_fresh() {
+  unshare --mount --propagation private -- bash -c '
+    set -e
+    r="$1"; shift
+    mount -t proc proc "$r/proc"
+    mount -t sysfs sys "$r/sys"
+    mount --rbind /dev "$r/dev"
+    exec env -i HOME=/root PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
+      LANG=C.UTF-8 TERM=dumb chroot "$r" /bin/bash -c "cd /root/tessera && $*"
+  ' fresh "$rootfs" "$@"
+}
+
+begin "README command 1: tools/render.sh"
+in_fresh tools/render.sh
+in_fresh 'test -s out/cornell-box.exr && test -s out/cornell-box.png' ||
+  { echo "fresh_check: tools/render.sh did not write out/cornell-box.exr and .png" >&2; exit 1; }
+end
+
+begin "README command 2: tools/test.sh"
+in_fresh 'tools/test.sh 2>&1 | tee /root/test.log; exit ${PIPESTATUS[0]}'
+# Every test runs on a fresh machine: a skip here means an install or fetch step is missing (the
+# test meshes come from the npm registry; when it cannot be reached this fails, saying so).
+skipped="$(grep -cE '\*\*\*Skipped|Skipped  *[0-9.]+ sec' "$rootfs/root/test.log" || true)"
+summary="$(grep -E 'tests passed|tests failed' "$rootfs/root/test.log" | tail -n 1)"
+echo "fresh_check: $summary; skipped: $skipped"
+if [ "$skipped" -ne 0 ]; then
+  grep -E '\*\*\*Skipped|Skipped  *[0-9.]+ sec' "$rootfs/root/test.log" >&2
+  echo "fresh_check: $skipped test(s) skipped on the fresh machine" >&2
+  exit 1
+fi
+end
+
+echo ""
+echo "fresh_check: passed in $((SECONDS - t_start)) s on $(nproc) cores ($(git -C "$root" rev-parse --short HEAD), $(date -u +%Y-%m-%d))"
+for line in "${report[@]}"; do echo "  $line"; done
