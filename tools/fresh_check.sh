@@ -13,7 +13,7 @@
 #
 # Only the bootstrap tarball is cached (one a day, in $TESSERA_CACHE or ~/.cache/tessera/fresh-check):
 # it holds nothing of the project. The project's packages, build and test meshes are never cached.
-# Needs root (chroot, mounts; run inside `unshare --mount` so nothing stays mounted) and the
+# Needs root (chroot, mounts in a private mount namespace, so nothing stays mounted) and the
 # network to Debian's archive and the npm registry, as a new user's machine has.
 # Uncommitted changes are NOT checked: commit first (a warning says so).
 set -euo pipefail
@@ -27,6 +27,11 @@ for a in "$@"; do
   esac
 done
 [ "$(id -u)" -eq 0 ] || { echo "fresh_check: needs root (chroot and mounts)" >&2; exit 2; }
+# Everything below runs in a private mount namespace: the root file system's tmpfs and its proc,
+# sys and dev mounts vanish with this process, however it ends.
+if [ -z "${TESSERA_FRESH_CHECK_NS:-}" ]; then
+  exec unshare --mount --propagation private env TESSERA_FRESH_CHECK_NS=1 bash "$0" "$@"
+fi
 
 t_start=$SECONDS
 step_name=""; step_t0=0
@@ -41,7 +46,7 @@ on_exit() {
   fi
   if [ -n "${rootfs:-}" ] && [ -d "$rootfs" ]; then
     if [ $keep -eq 1 ]; then echo "fresh_check: root file system kept at $rootfs" >&2
-    else rm -rf --one-file-system "$rootfs"; fi
+    else umount -R "$rootfs" 2>/dev/null; rmdir "$rootfs" 2>/dev/null || true; fi
   fi
   exit $rc
 }
@@ -70,27 +75,38 @@ end
 
 begin "unpack root file system, copy git archive HEAD"
 rootfs="$(mktemp -d "${TMPDIR:-/var/tmp}/tessera-fresh.XXXXXX")"
+# On a tmpfs (unless kept): about 3 GiB with packages and build; deleting that many files from a disk
+# that discards freed blocks takes minutes.
+[ $keep -eq 1 ] || mount -t tmpfs -o size=12G,mode=755 tessera-fresh "$rootfs"
 chmod 755 "$rootfs"
 tar --zstd -xf "$tarball" -C "$rootfs"
+# The network is the host's, and so are its settings: name servers, proxy variables, and the extra
+# certificate authority of a network that intercepts TLS (named by NODE_EXTRA_CA_CERTS, as npm reads
+# it). Nothing of the project is copied this way.
 cp -L /etc/resolv.conf "$rootfs/etc/resolv.conf" 2>/dev/null || true
+network_env=()
+for v in http_proxy https_proxy no_proxy HTTP_PROXY HTTPS_PROXY NO_PROXY; do
+  if [ -n "${!v:-}" ]; then network_env+=("$v=${!v}"); fi
+done
+if [ -n "${NODE_EXTRA_CA_CERTS:-}" ] && [ -f "$NODE_EXTRA_CA_CERTS" ]; then
+  cp -L "$NODE_EXTRA_CA_CERTS" "$rootfs/etc/ssl/host-network-ca.crt"
+  network_env+=("NODE_EXTRA_CA_CERTS=/etc/ssl/host-network-ca.crt")
+fi
 mkdir -p "$rootfs/root/tessera"
 git -C "$root" archive --format=tar HEAD | tar -xf - -C "$rootfs/root/tessera"
 echo "fresh_check: $(git -C "$root" rev-parse --short HEAD) in $rootfs/root/tessera"
 end
 
-# One command inside the root file system, in a private mount namespace (proc, sys and dev are
-# mounted there and vanish with it), with a new user's environment: no TESSERA_* variables, no
-# shared/ beside the checkout, HOME=/root.
+# Commands run inside the root file system with proc, sys and dev mounted (in this process's private
+# mount namespace) and a new user's environment: no TESSERA_* variables, no shared/ beside the
+# checkout, HOME=/root; only the network settings above come from the host.
+mount -t proc proc "$rootfs/proc"
+mount -t sysfs sys "$rootfs/sys"
+mount --rbind /dev "$rootfs/dev"
 in_fresh() {
-  unshare --mount --propagation private -- bash -c '
-    set -e
-    r="$1"; shift
-    mount -t proc proc "$r/proc"
-    mount -t sysfs sys "$r/sys"
-    mount --rbind /dev "$r/dev"
-    exec env -i HOME=/root PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
-      LANG=C.UTF-8 TERM=dumb chroot "$r" /bin/bash -c "cd /root/tessera && $*"
-  ' fresh "$rootfs" "$@"
+  env -i HOME=/root PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
+    LANG=C.UTF-8 TERM=dumb ${network_env[@]+"${network_env[@]}"} \
+    chroot "$rootfs" /bin/bash -c "cd /root/tessera && $*"
 }
 
 begin "README command 1: tools/render.sh"
