@@ -89,6 +89,7 @@ for v in http_proxy https_proxy no_proxy HTTP_PROXY HTTPS_PROXY NO_PROXY; do
   if [ -n "${!v:-}" ]; then network_env+=("$v=${!v}"); fi
 done
 if [ -n "${NODE_EXTRA_CA_CERTS:-}" ] && [ -f "$NODE_EXTRA_CA_CERTS" ]; then
+  mkdir -p "$rootfs/etc/ssl"
   cp -L "$NODE_EXTRA_CA_CERTS" "$rootfs/etc/ssl/host-network-ca.crt"
   network_env+=("NODE_EXTRA_CA_CERTS=/etc/ssl/host-network-ca.crt")
 fi
