@@ -27,7 +27,9 @@ tessera:spp_total, tessera:render_seconds (sum over the K renders), tessera:git,
 own tessera:* attributes of the first render (scene hash, version, accel, max depth).
 
 Tests and the convergence study must not use seeds 1000-2999 for their own renders.
-Needs python3-numpy and python3-openimageio (Debian); installs them with apt-get if missing.
+Needs python3-numpy and python3-openimageio: `bash tools/bootstrap.sh --install study` installs them
+when missing (this script calls it itself). tools/study --make-refs makes quick development
+references with the same estimator (mean_of_renders below).
 """
 
 import json
@@ -37,6 +39,10 @@ import subprocess
 import sys
 import tempfile
 import time
+
+sys.dont_write_bytecode = True  # keep tools/ free of __pycache__
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import study_deps  # noqa: E402
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 REFS = os.path.join(ROOT, "refs")
@@ -92,23 +98,6 @@ WHY = {
 }
 
 
-def ensure_python_deps():
-    try:
-        import numpy  # noqa: F401
-        import OpenImageIO  # noqa: F401
-    except ImportError:
-        # The Debian packages serve the system interpreter; a pyenv/venv python3 earlier on PATH
-        # does not see them, so hand over to /usr/bin/python3 when that is not us.
-        system = "/usr/bin/python3"
-        if os.path.exists(system) and os.path.realpath(sys.executable) != os.path.realpath(system):
-            os.execv(system, [system] + sys.argv)
-        print("make_refs.py: installing python3-numpy python3-openimageio", file=sys.stderr)
-        cmd = ["apt-get", "install", "-y", "-q", "python3-numpy", "python3-openimageio"]
-        if os.geteuid() != 0:
-            cmd = ["sudo"] + cmd
-        subprocess.check_call(cmd, env=dict(os.environ, DEBIAN_FRONTEND="noninteractive"))
-
-
 def git_revision():
     rev = subprocess.check_output(["git", "rev-parse", "HEAD"], cwd=ROOT, text=True).strip()
     dirty = subprocess.call(["git", "diff", "--quiet", "HEAD", "--", "src", "scenes"], cwd=ROOT)
@@ -128,80 +117,38 @@ def render(scene, res, integrator, spp, seed, out, threads):
     return json.loads(result.stdout.strip().splitlines()[-1]), cmd
 
 
-def read_exr(path):
+def mean_of_renders(render_seed, seeds):
+    """The reference estimator: render_seed(seed) renders one independent image and returns its EXR
+    path; the reference is the per-pixel mean over `seeds`, its noise the standard error of that mean
+    across the renders (sample standard deviation / sqrt(K)), valid for splatting integrators too.
+    Returns (mean, stderr), float64 [H, W, 3]."""
     import numpy as np
-    import OpenImageIO as oiio
-    inp = oiio.ImageInput.open(path)
-    if inp is None:
-        raise RuntimeError("cannot open " + path)
-    spec = inp.spec()
-    pixels = inp.read_image(0, 0, 0, 4, oiio.FLOAT)
-    attrs = {a.name: a.value for a in spec.extra_attribs}
-    inp.close()
-    return np.asarray(pixels, dtype=np.float64)[:, :, :3], attrs
-
-
-def write_exr(path, rgb, attrs):
-    """RGB float32 EXR (ZIP). Not half: dark pixels and standard errors fall below half's smallest
-    normal (6.1e-5), and a reader running with denormals-are-zero (as renderer threads do) reads
-    such half subnormals as 0."""
-    import numpy as np
-    import OpenImageIO as oiio
-    h, w, _ = rgb.shape
-    rgba = rgb.astype(np.float32)
-    spec = oiio.ImageSpec(w, h, 3, oiio.FLOAT)
-    spec.channelnames = ("R", "G", "B")
-    spec.attribute("compression", "zip")
-    for k, v in attrs.items():
-        spec.attribute(k, str(v))
-    tmp = path + ".tmp.exr"
-    out = oiio.ImageOutput.create(tmp)
-    if out is None or not out.open(tmp, spec):
-        raise RuntimeError("cannot write " + path + ": " + oiio.geterror())
-    out.write_image(rgba)
-    out.close()
-    os.replace(tmp, path)
-
-
-def write_thumbnail(path, rgb, width=128):
-    import numpy as np
-    import OpenImageIO as oiio
-    h, w, _ = rgb.shape
-    lin = np.clip(rgb, 0.0, None)
-    srgb = np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * np.power(lin, 1 / 2.4) - 0.055)
-    src = oiio.ImageBuf(oiio.ImageSpec(w, h, 3, oiio.FLOAT))
-    src.set_pixels(oiio.ROI(0, w, 0, h), np.clip(srgb, 0, 1).astype(np.float32))
-    th = max(1, round(h * width / w))
-    dst = oiio.ImageBufAlgo.resize(src, roi=oiio.ROI(0, width, 0, th, 0, 1, 0, 3))
-    dst.set_write_format(oiio.UINT8)
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    if not dst.write(path):
-        raise RuntimeError("cannot write " + path)
+    import exr_io
+    stack = np.stack([exr_io.read_exr(render_seed(seed))[0] for seed in seeds])
+    return stack.mean(axis=0), stack.std(axis=0, ddof=1) / np.sqrt(len(seeds))
 
 
 def run_set(name, scene, res, integrator, spp, seed0, tmpdir, threads):
     """K renders; returns (mean, stderr, seconds, command template, first render's attributes)."""
-    import numpy as np
-    images, seconds, attrs0, template = [], 0.0, None, None
-    for k in range(K):
-        seed = seed0 + k
+    import exr_io
+    state = {"seconds": 0.0, "attrs0": None, "template": None}
+
+    def render_seed(seed):
         out = os.path.join(tmpdir, "%s-%s-%d.exr" % (name, integrator, seed))
         t0 = time.time()
         info, cmd = render(scene, res, integrator, spp, seed, out, threads)
-        seconds += info["seconds"]
-        img, attrs = read_exr(out)
+        state["seconds"] += info["seconds"]
         if info["nonfinite_dropped"]:
             print("  warning: %d non-finite samples dropped" % info["nonfinite_dropped"], file=sys.stderr)
-        images.append(img)
-        if attrs0 is None:
-            attrs0 = attrs
-            template = " ".join("SEED" if c == str(seed) else c for c in cmd).replace(out, "OUT.exr")
+        if state["attrs0"] is None:
+            state["attrs0"] = exr_io.read_exr(out)[1]
+            state["template"] = " ".join("SEED" if c == str(seed) else c for c in cmd).replace(out, "OUT.exr")
         print("  %s %s seed %d: %.1f s (wall %.1f s)" % (name, integrator, seed, info["seconds"],
                                                        time.time() - t0), file=sys.stderr, flush=True)
-    stack = np.stack(images)
-    mean = stack.mean(axis=0)
-    stderr = stack.std(axis=0, ddof=1) / np.sqrt(K)
-    return mean, stderr, seconds, template, attrs0
+        return out
+
+    mean, stderr = mean_of_renders(render_seed, range(seed0, seed0 + K))
+    return mean, stderr, state["seconds"], state["template"], state["attrs0"]
 
 
 def agreement(a, sa, b, sb):
@@ -221,6 +168,7 @@ def agreement(a, sa, b, sb):
 
 def make_one(name, out_dir, threads, scale):
     import numpy as np
+    import exr_io
     scene, res, integ, spp, agree, agree_spp = SCENES[name]
     spp = max(1, int(round(spp * scale)))
     agree_spp = max(1, int(round(agree_spp * scale)))
@@ -260,10 +208,10 @@ def make_one(name, out_dir, threads, scale):
     if "agreement" in entry:
         attrs["tessera:agreement"] = json.dumps(entry["agreement"])
     os.makedirs(out_dir, exist_ok=True)
-    write_exr(os.path.join(out_dir, name + ".exr"), mean, dict(attrs, **{"tessera:kind": "mean of the renders"}))
-    write_exr(os.path.join(out_dir, name + "-stderr.exr"), stderr,
+    exr_io.write_exr(os.path.join(out_dir, name + ".exr"), mean, dict(attrs, **{"tessera:kind": "mean of the renders"}))
+    exr_io.write_exr(os.path.join(out_dir, name + "-stderr.exr"), stderr,
               dict(attrs, **{"tessera:kind": "standard error of the mean across the renders"}))
-    write_thumbnail(os.path.join(out_dir, "thumbs", name + ".png"), mean)
+    exr_io.write_thumbnail(os.path.join(out_dir, "thumbs", name + ".png"), mean)
     return entry
 
 
@@ -296,8 +244,8 @@ def write_readme(db):
         "can sample every path; z = |a − b| / sqrt(σa² + σb²) per pixel channel; mean ratio = its image",
         "mean / the reference's. With K = 8 renders each σ has 7 degrees of freedom, so about 1% of",
         "channels exceed 3σ even when both agree; heavy-tailed estimators (ptnee's BSDF-sampled caustics)",
-        "underestimate their own σ and show more. The references were rendered with",
-        "`TESSERA_ASSETS=/work/shared/data` for the dragon mesh (same bytes as `tools/fetch_assets.sh`).",
+        "underestimate their own σ and show more. The dragon scenes read the Stanford dragon that",
+        "`tools/fetch_assets.sh` fetches (SHA-256 checked), found through `TESSERA_ASSETS` or the fetch cache.",
         "",
         "| reference | integrator, renders × spp | resolution | render s | mean RGB | median rel. stderr | agreement | why this integrator |",
         "|---|---|---|---|---|---|---|---|",
@@ -350,7 +298,7 @@ def main(argv):
     if out_dir is None:
         print("--scale writes trial references: give --out DIR (refs/ holds only full ones)")
         return 2
-    ensure_python_deps()
+    study_deps.ensure_packages(("numpy", "OpenImageIO"))
     if not os.path.exists(TESSERA):
         print("build first: cmake -S . -B build -DCMAKE_BUILD_TYPE=Release && cmake --build build")
         return 1

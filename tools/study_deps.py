@@ -1,39 +1,38 @@
-"""Debian packages the convergence study needs, installed when missing (quiet when present).
-
-Same policy as tools/bootstrap.sh: dpkg-query for what is installed, apt-get --no-install-recommends
-for what is not, through sudo when not root. numpy computes the metrics the renderer does not print,
-OpenImageIO's Python binding reads the EXRs, matplotlib draws the charts.
-"""
+"""Makes the Python modules of tools/study and tools/make_refs.py importable (numpy, OpenImageIO,
+matplotlib). The packages themselves are listed and installed by tools/bootstrap.sh (group `study`),
+the project's one installer; this only decides when to call it and which interpreter to run."""
+import importlib
 import os
-import shutil
 import subprocess
 import sys
 
-PACKAGES = ["python3-numpy", "python3-openimageio", "python3-matplotlib"]
+HERE = os.path.dirname(os.path.abspath(__file__))
+SYSTEM_PYTHON = "/usr/bin/python3"
 
 
-def _installed(package):
-    r = subprocess.run(["dpkg-query", "-W", "-f=${Status}", package],
-                       stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    return r.returncode == 0 and "install ok installed" in r.stdout
+def _missing(modules):
+    missing = []
+    for m in modules:
+        try:
+            importlib.import_module(m)
+        except ImportError:
+            missing.append(m)
+    return missing
 
 
-def ensure_packages():
-    """Install the missing packages; exit with a clear message when that is impossible."""
-    if shutil.which("dpkg-query") is None:
-        return  # not Debian: assume the modules come from elsewhere; the imports will say if not
-    missing = [p for p in PACKAGES if not _installed(p)]
+def ensure_packages(modules=("numpy", "OpenImageIO", "matplotlib"), install=True):
+    """Return when `modules` import. Otherwise: the Debian packages serve the system interpreter, and
+    a pyenv/venv python3 earlier on PATH does not see them, so hand over to /usr/bin/python3 (same
+    arguments) when that is not us; there, run `bash tools/bootstrap.sh --install study` and retry."""
+    missing = _missing(modules)
     if not missing:
         return
-    sudo = []
-    if os.geteuid() != 0:
-        if shutil.which("sudo") is None:
-            sys.exit("study: these packages are missing and I am not root (no sudo): " + " ".join(missing))
-        sudo = ["sudo"]
-    print("study: installing " + " ".join(missing), file=sys.stderr, flush=True)
-    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
-    subprocess.run(sudo + ["env", "DEBIAN_FRONTEND=noninteractive", "apt-get", "update", "-qq"],
-                   check=True, stdout=subprocess.DEVNULL, env=env)
-    subprocess.run(sudo + ["env", "DEBIAN_FRONTEND=noninteractive", "apt-get", "install", "-y", "-qq",
-                           "--no-install-recommends"] + missing,
-                   check=True, stdout=subprocess.DEVNULL, env=env)
+    if os.path.exists(SYSTEM_PYTHON) and os.path.realpath(sys.executable) != os.path.realpath(SYSTEM_PYTHON):
+        os.execv(SYSTEM_PYTHON, [SYSTEM_PYTHON] + sys.argv)
+    if install:
+        subprocess.run(["bash", os.path.join(HERE, "bootstrap.sh"), "--install", "study"], check=True)
+        importlib.invalidate_caches()
+        missing = _missing(modules)
+    if missing:
+        sys.exit(f"{os.path.basename(sys.argv[0])}: Python modules missing: {' '.join(missing)} "
+                 f"(install them with: bash tools/bootstrap.sh --install study)")

@@ -1,6 +1,6 @@
 """Metrics the renderer does not print, and the verdict rules of the stability table.
 
-Definitions (see also /work/shared/notes-bdpt.md, "measuring accuracy"):
+Definitions (writeup.md, section "Speed against accuracy", shows them at work):
 - image mean m: mean over finite pixels and the three channels.
 - bias = m_test - m_ref, pooled over every render of a series. Renders have independent seeds and
   Var(m_i) = sigma^2 / spp_i for an estimator that averages spp_i independent samples per pixel, so
@@ -10,7 +10,7 @@ Definitions (see also /work/shared/notes-bdpt.md, "measuring accuracy"):
   (conservative). SE = sqrt(SE_test^2 + SE_ref^2).
 - reference floor: E[(x - r)^2] = Var x + Var r for an unbiased x, so the measured relMSE contains
   mean(se^2 / (r^2 + 0.01)); it is subtracted before fitting, and a point with relMSE below 16x the
-  floor is flagged (the notes' rule: the reference must be >= 16x more accurate than what it judges).
+  floor is flagged (the rule: a reference must be >= 16x more accurate than what it judges).
 - firefly share: share of the image's luminance in its brightest 0.01% of pixels (at least one).
 - slope: least-squares slope of log relMSE (floor subtracted, mean over seeds) against log seconds.
 - dark share: share of the reference's luminance in pixels where the pooled test image has under 10%

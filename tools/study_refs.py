@@ -1,4 +1,4 @@
-"""Reference discovery, EXR input/output and box downsampling for the convergence study.
+"""Reference discovery and box downsampling for the convergence study.
 
 A reference is refs/<name>.exr (any depth below refs/, except refs/study/) with, when present, its
 per-pixel standard-error image beside it (refs/<name>.stderr.exr or one of the spellings in
@@ -10,7 +10,8 @@ import glob
 import os
 
 import numpy as np
-import OpenImageIO as oiio
+
+from exr_io import read_exr
 
 # Spellings of the standard-error companion image, tried in order ("<name><suffix>").
 STDERR_SUFFIXES = [".stderr.exr", "-stderr.exr", "_stderr.exr", ".se.exr", "-se.exr", "_se.exr",
@@ -38,39 +39,6 @@ class Reference:
     @property
     def height(self):
         return self.rgb.shape[0]
-
-
-def read_exr(path):
-    """(float64 RGB array [H, W, 3], metadata dict) of an image OpenImageIO can read."""
-    inp = oiio.ImageInput.open(path)
-    if inp is None:
-        raise RuntimeError(f"{path}: cannot open: {oiio.geterror()}")
-    spec = inp.spec()
-    pixels = inp.read_image(0, 0, 0, min(spec.nchannels, 3), "float")
-    inp.close()
-    if pixels is None:
-        raise RuntimeError(f"{path}: cannot read pixels")
-    pixels = np.asarray(pixels, dtype=np.float64).reshape(spec.height, spec.width, -1)
-    if pixels.shape[2] == 1:
-        pixels = np.repeat(pixels, 3, axis=2)
-    meta = {a.name: a.value for a in spec.extra_attribs}
-    return pixels[:, :, :3], meta
-
-
-def write_exr(path, rgb, meta=None):
-    """Write float RGB (+ alpha 1) to an EXR with string metadata."""
-    h, w, _ = rgb.shape
-    spec = oiio.ImageSpec(w, h, 4, "float")
-    spec.channelnames = ("R", "G", "B", "A")
-    spec.attribute("compression", "zip")
-    for k, v in (meta or {}).items():
-        spec.attribute(k, str(v))
-    rgba = np.concatenate([rgb.astype(np.float32), np.ones((h, w, 1), np.float32)], axis=2)
-    out = oiio.ImageOutput.create(path)
-    if out is None or not out.open(path, spec):
-        raise RuntimeError(f"{path}: cannot write: {oiio.geterror()}")
-    out.write_image(rgba)
-    out.close()
 
 
 def _is_companion(path):

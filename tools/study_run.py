@@ -11,6 +11,7 @@ import time
 
 import numpy as np
 
+import exr_io
 import study_metrics as sm
 import study_refs
 import study_render
@@ -37,7 +38,7 @@ class SceneStudy:
         self.se = study_refs.box_downsample_stderr(ref.stderr, f)
         self.resolution = (self.rgb.shape[1], self.rgb.shape[0])
         self.ref_path = os.path.join(tmp, f"{ref.name}-ref.exr")
-        study_refs.write_exr(self.ref_path, self.rgb)
+        exr_io.write_exr(self.ref_path, self.rgb)
         self.floor = sm.reference_floor(self.rgb, self.se)
         self.ref_mean = sm.image_mean(self.rgb)
         self.ref_mean_se = sm.reference_mean_se(self.se)
@@ -57,7 +58,7 @@ class SceneStudy:
         exr = os.path.join(self.tmp, f"{self.ref.name}-{integrator}-{accel}-{spp}-{seed}.exr")
         j = self.tess.render(self.ref.scene, exr, integrator, accel, spp, seed, self.resolution, self.max_depth)
         c = self.tess.compare(exr, self.ref_path)
-        rgb, _ = study_refs.read_exr(exr)
+        rgb, _ = exr_io.read_exr(exr)
         os.remove(exr)
         row = {"scene": self.ref.name, "integrator": integrator, "accel": accel, "spp": j["spp"], "seed": seed,
                "width": self.resolution[0], "height": self.resolution[1], "seconds": float(j["seconds"]),
