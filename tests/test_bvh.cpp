@@ -11,7 +11,7 @@
 #include <fstream>
 
 #include "accel/bvh_accel.h"
-#include "accel/validate.h"
+#include "validation/validate.h"
 #include "core/rng.h"
 #include "scene/gltf_loader.h"
 #include "scene/mesh_loader.h"
@@ -88,7 +88,7 @@ void expectMatchesEmbree(const SceneGeometry& g, size_t raysPerKind, const std::
     EXPECT_EQ(bvh.checkInvariants(), "") << what;
     auto embree = createAccel("embree", g);
     auto brute = createAccel("brute", g);
-    for (RayKind kind : kAllRayKinds) {
+    for (RayKind kind : kValidationRayKinds) {
         std::vector<Ray> rays = generateRays(g, *embree, kind, raysPerKind, /*seed=*/7);
         if (g.primitiveCount() <= 5000) {
             // The same watertight test in both: answers may differ only where either is admissible
@@ -275,7 +275,7 @@ TEST(Bvh, PortableAndAvx2KernelsGiveIdenticalRecords) {
         return ha == hb && (!ha || (std::memcmp(&a.t, &b.t, 4) == 0 && std::memcmp(&a.u, &b.u, 4) == 0 &&
                                     std::memcmp(&a.v, &b.v, 4) == 0 && a.geomId == b.geomId && a.primId == b.primId));
     };
-    for (RayKind kind : kAllRayKinds)
+    for (RayKind kind : kValidationRayKinds)
         for (const Ray& r : generateRays(g, *embree, kind, 2000, /*seed=*/5)) {
             Hit a, b, c, d;
             bool ha = fast.intersect(r, a), hb = portable.intersect(r, b);

@@ -8,7 +8,7 @@
 
 #include "accel/kdtree_accel.h"
 #include "accel/kdtree_wide.h"
-#include "accel/validate.h"
+#include "validation/validate.h"
 #include "accel_pathologies.h"
 #include "scene/gltf_loader.h"
 #include "scene/mesh_loader.h"
@@ -25,7 +25,7 @@ void expectMatchesEmbree(const SceneGeometry& g, size_t raysPerKind, const std::
     EXPECT_EQ(kd.checkInvariants(), "") << what;
     auto embree = createAccel("embree", g);
     auto brute = createAccel("brute", g);
-    for (RayKind kind : kAllRayKinds) {
+    for (RayKind kind : kValidationRayKinds) {
         std::vector<Ray> rays = generateRays(g, *embree, kind, raysPerKind, /*seed=*/11);
         if (g.primitiveCount() <= 5000) {
             ValidationResult vsBrute = compareAccels(kd, *brute, g, rays, kind);
@@ -243,7 +243,7 @@ TEST(KdTree, PortableAndAvx2KernelsGiveTheSameBits) {
     EXPECT_EQ(portable.isa(), "sse2/portable");
     auto embree = createAccel("embree", g);
     size_t hits = 0;
-    for (RayKind kind : kAllRayKinds)
+    for (RayKind kind : kValidationRayKinds)
         for (const Ray& r : generateRays(g, *embree, kind, 2000, /*seed=*/5)) {
             Hit a, b, c, d;
             bool ha = fast.intersect(r, a), hb = portable.intersect(r, b);

@@ -17,13 +17,10 @@
 
 #include "accel/bvh_accel.h"
 #include "accel/kdtree_accel.h"
-#include "accel/validate.h"
 #include "app/commands.h"
 #include "core/error.h"
-#include "core/frame.h"
-#include "core/rng.h"
-#include "core/sampling.h"
 #include "scene/mesh_loader.h"
+#include "validation/ray_sets.h"
 
 namespace tessera::app {
 namespace {
@@ -42,6 +39,8 @@ double median(std::vector<double> v) {
     return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
 }
 
+/// The benchmark's three ray sets, from the one generator validate-accel uses: primary rays in pixel
+/// order, diffuse bounces from their hits in random order, shadow rays from their hits.
 struct RaySets {
     std::vector<Ray> primary, diffuse, shadow;
     const std::vector<Ray>& get(const std::string& kind) const {
@@ -49,37 +48,12 @@ struct RaySets {
     }
 };
 
-/// Primary rays through every pixel centre; from their hits (found with `oracle`), one cosine bounce
-/// each (shuffled, so consecutive rays are incoherent) and one shadow ray to a random point on the
-/// top face of the scene's bounds.
-RaySets makeRays(const SceneGeometry& g, const Accel& oracle, const std::optional<CameraDesc>& camDesc, int resolution,
+RaySets makeRays(const SceneGeometry& g, const Accel& oracle, const std::optional<CameraDesc>& camera, int resolution,
                  uint64_t seed) {
-    RaySets sets;
-    Bounds3f b = g.bounds();
-    if (b.empty()) b.lower = Vec3f(-1.f), b.upper = Vec3f(1.f);
-    Camera cam(camDesc ? *camDesc : framingCamera(b), resolution, resolution);
-    for (int y = 0; y < resolution; ++y)
-        for (int x = 0; x < resolution; ++x) sets.primary.push_back(cam.generateRay(Vec2f(x + 0.5f, y + 0.5f), Vec2f(0.5f)));
-    Pcg32 rng(seed, 0);
-    for (const Ray& r : sets.primary) {
-        Hit h;
-        if (!oracle.intersect(r, h)) continue;
-        Vec3f p;
-        if (h.geomId < g.meshes.size()) {
-            const TriangleMesh& m = g.meshes[h.geomId];
-            const glm::uvec3& t = m.triangles[h.primId];
-            p = (1.f - h.u - h.v) * m.positions[t.x] + h.u * m.positions[t.y] + h.v * m.positions[t.z];
-        } else {
-            p = r.o + h.t * r.d;
-        }
-        Vec3f n = glm::dot(h.ng, r.d) < 0.f ? h.ng : -h.ng;
-        sets.diffuse.push_back(spawnRay(p, n, Frame(n).toWorld(sampleCosineHemisphere(rng.next2D()))));
-        Vec3f target(b.lower.x + rng.nextFloat() * (b.upper.x - b.lower.x), b.upper.y,
-                     b.lower.z + rng.nextFloat() * (b.upper.z - b.lower.z));
-        sets.shadow.push_back(spawnShadowRay(p, n, target, Vec3f(0.f)));
-    }
-    for (size_t i = sets.diffuse.size(); i > 1; --i) std::swap(sets.diffuse[i - 1], sets.diffuse[rng.nextU32() % i]);
-    return sets;
+    size_t count = size_t(resolution) * size_t(resolution);
+    return {generateRays(g, oracle, RayKind::Primary, count, seed, camera),
+            generateRays(g, oracle, RayKind::Diffuse, count, seed, camera),
+            generateRays(g, oracle, RayKind::Shadow, count, seed, camera)};
 }
 
 /// The query a ray set is traced with: closest hit (primary rays through intersectCoherent, as
@@ -194,7 +168,7 @@ Runner addBenchAccelCommand(CLI::App& app) {
     cmd->add_option("--rays", opt->rays, "ray kinds: primary, diffuse, shadow")->capture_default_str();
     cmd->add_option("--repeat", opt->repeat, "interleaved repeats (the median is reported)")->capture_default_str();
     cmd->add_option("--resolution", opt->resolution, "primary rays: a square image of this many pixels a side")->capture_default_str();
-    cmd->add_option("--seed", opt->seed, "seed of the diffuse and shadow rays")->capture_default_str();
+    cmd->add_option("--seed", opt->seed, "seed of the ray sets")->capture_default_str();
     cmd->add_flag("--json", opt->json, "print one JSON object instead of text");
     cmd->add_flag("--complexity", opt->complexity, "build times only, with build time / (N log2 N) per input");
     return [opt] {
