@@ -61,17 +61,19 @@ inline uint32_t eventPrim(Event e) { return uint32_t(e) & kPrimMask; }
 /// Axis and position: equal for all events of one candidate plane.
 inline uint64_t eventPlane(Event e) { return e >> 30; }
 
-/// The events of one primitive box: start/end per axis, or one planar event where it is flat.
-template <typename Out>
-inline void appendEvents(const Bounds3f& b, uint32_t prim, Out& out) {
-    for (int a = 0; a < 3; ++a) {
-        if (b.lower[a] == b.upper[a]) {
-            out.push_back(makeEvent(a, b.lower[a], kPlanar, prim));
-        } else {
-            out.push_back(makeEvent(a, b.lower[a], kStart, prim));
-            out.push_back(makeEvent(a, b.upper[a], kEnd, prim));
-        }
+/// The events of one primitive box on one axis: start and end, or one planar event where it is flat.
+inline void appendAxisEvents(const Bounds3f& b, int a, uint32_t prim, std::vector<Event>& out) {
+    if (b.lower[a] == b.upper[a]) {
+        out.push_back(makeEvent(a, b.lower[a], kPlanar, prim));
+    } else {
+        out.push_back(makeEvent(a, b.lower[a], kStart, prim));
+        out.push_back(makeEvent(a, b.upper[a], kEnd, prim));
     }
+}
+
+/// The events of one primitive box on all three axes.
+inline void appendEvents(const Bounds3f& b, uint32_t prim, std::vector<Event>& out) {
+    for (int a = 0; a < 3; ++a) appendAxisEvents(b, a, prim, out);
 }
 
 /// Stable LSD radix sort on the key bits above the primitive (axis, position, type): 3 passes of
@@ -221,7 +223,7 @@ public:
             else if (r.box.lower[a] >= best.pos) right.push_back(r);
             else {
                 // Straddling: perfect split, clipped to each child (within its current box).
-                Bounds3f bl = intersect(clipped(r.prim, leftCell), r.box), br = intersect(clipped(r.prim, rightCell), r.box);
+                Bounds3f bl = clipped(r.prim, leftCell).intersection(r.box), br = clipped(r.prim, rightCell).intersection(r.box);
                 if (!bl.empty()) left.push_back({bl, r.prim});
                 if (!br.empty()) right.push_back({br, r.prim});
             }
@@ -238,13 +240,6 @@ public:
     }
 
 private:
-    static Bounds3f intersect(const Bounds3f& a, const Bounds3f& b) {
-        Bounds3f r;
-        r.lower = glm::max(a.lower, b.lower);
-        r.upper = glm::min(a.upper, b.upper);
-        return r;
-    }
-
     /// Binned SAH (min–max binning): per axis, count the references whose box starts in each bin
     /// and those whose box ends in each bin; at the boundary after bin k, N_L = starts in bins ≤ k
     /// and N_R = ends in bins > k. Bin indices round like the plane positions only approximately,
@@ -297,14 +292,7 @@ private:
         std::vector<Event> list;
         list.reserve(refs.size() * 6);
         for (int a = 0; a < 3; ++a)
-            for (const Ref& r : refs) {
-                if (r.box.lower[a] == r.box.upper[a]) {
-                    list.push_back(makeEvent(a, r.box.lower[a], kPlanar, r.prim));
-                } else {
-                    list.push_back(makeEvent(a, r.box.lower[a], kStart, r.prim));
-                    list.push_back(makeEvent(a, r.box.upper[a], kEnd, r.prim));
-                }
-            }
+            for (const Ref& r : refs) appendAxisEvents(r.box, a, r.prim, list);
         radixSortEvents(list);
         events.allocate(list.size());
         std::copy(list.begin(), list.end(), events.data.get());
@@ -439,9 +427,7 @@ private:
     /// The primitive clipped to the cell (perfect split), always within the cell.
     Bounds3f clipped(uint32_t prim, const Bounds3f& cell) const {
         Bounds3f b = (config_.perfectSplits && clip_) ? clip_(prim, cell) : bounds_[prim];
-        b.lower = glm::max(b.lower, cell.lower);
-        b.upper = glm::min(b.upper, cell.upper);
-        return b;
+        return b.intersection(cell);
     }
 
     std::vector<uint32_t> primsOf(const EventList& events) const {
@@ -506,15 +492,7 @@ KdTree buildKdTree(std::span<const Bounds3f> primBounds, const KdClipFunction& c
         events.reserve(6 * n);
         // Per axis, in primitive order: the radix sort is stable, so equal keys stay by primitive.
         for (int a = 0; a < 3; ++a)
-            for (uint32_t i = 0; i < n; ++i) {
-                const Bounds3f& b = primBounds[i];
-                if (b.lower[a] == b.upper[a]) {
-                    events.push_back(makeEvent(a, b.lower[a], kPlanar, i));
-                } else {
-                    events.push_back(makeEvent(a, b.lower[a], kStart, i));
-                    events.push_back(makeEvent(a, b.upper[a], kEnd, i));
-                }
-            }
+            for (uint32_t i = 0; i < n; ++i) appendAxisEvents(primBounds[i], a, i, events);
         radixSortEvents(events);
         EventList root;
         root.allocate(events.size());
