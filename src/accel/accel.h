@@ -22,7 +22,9 @@ struct AccelStats {
 };
 
 struct AccelOptions {
-    int threads = 0;  ///< threads for the build (0 = all); Embree's device gets the same count
+    /// Threads for the builds that run in parallel (0 = all): Embree's device and our BVH's
+    /// object-split build. The k-d tree and spatial-split builds are serial.
+    int threads = 0;
 };
 
 class Accel {

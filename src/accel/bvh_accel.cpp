@@ -27,6 +27,36 @@ void setEmptyChild(BvhAccel::Node8& n, int lane) {
     n.child[lane] = BvhAccel::kLeafBit;  // never visited: no ray enters an inverted box
 }
 
+/// True when box `in` lies inside box `out`.
+bool inside(const Bounds3f& in, const Bounds3f& out) {
+    return glm::all(glm::greaterThanEqual(in.lower, out.lower)) && glm::all(glm::lessThanEqual(in.upper, out.upper));
+}
+
+/// With spatial splits each leaf holds only a clipped part of a triangle: together the parts'
+/// boxes (`leafBoxesOf[i]` for build primitive i) must still cover it. Checked on a barycentric grid
+/// (vertices and edges included). Returns "" or the first uncovered point.
+std::string checkLeafCoverage(const SceneGeometry& g, const std::vector<PrimRef>& prims,
+                              const std::vector<std::vector<Bounds3f>>& leafBoxesOf) {
+    for (size_t i = 0; i < leafBoxesOf.size(); ++i) {
+        if (prims[i].geomId == g.sphereGeomId()) continue;
+        Vec3f p[3];
+        triangleVertices(g, prims[i], p);
+        constexpr int kGrid = 6;
+        for (int a = 0; a <= kGrid; ++a)
+            for (int b = 0; a + b <= kGrid; ++b) {
+                float u = float(a) / kGrid, v = float(b) / kGrid;
+                Bounds3f point;
+                point.extend((1.f - u - v) * p[0] + u * p[1] + v * p[2]);
+                bool covered = false;
+                for (const Bounds3f& box : leafBoxesOf[i]) covered |= inside(point, box);
+                if (!covered)
+                    return "triangle " + std::to_string(prims[i].primId) + " not covered by its leaves' boxes at (" +
+                           std::to_string(u) + ", " + std::to_string(v) + ")";
+            }
+    }
+    return {};
+}
+
 }  // namespace
 
 BvhAccel::BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, const BvhConfig& config)
@@ -210,9 +240,6 @@ std::string BvhAccel::checkInvariants() const {
         for (int v = 0; v < 3; ++v) b.extend(m.positions[m.triangles[p.primId][v]]);
         return b;
     };
-    auto inside = [](const Bounds3f& in, const Bounds3f& out) {
-        return glm::all(glm::greaterThanEqual(in.lower, out.lower)) && glm::all(glm::lessThanEqual(in.upper, out.upper));
-    };
     std::string problem;
     std::vector<std::vector<Bounds3f>> leafBoxesOf(config_.spatialSplits ? prims_.size() : 0);
     auto visitPrim = [&](PrimRef p, const Bounds3f& leafBox) {
@@ -270,27 +297,7 @@ std::string BvhAccel::checkInvariants() const {
     if (!problem.empty()) return problem;
     for (size_t i = 0; i < seen.size(); ++i)
         if (!seen[i]) return "primitive " + std::to_string(prims_[i].primId) + " of geometry " + std::to_string(prims_[i].geomId) + " unreachable";
-    // With spatial splits each leaf holds only a clipped part of a triangle: together the parts'
-    // boxes must still cover it. Checked on a barycentric grid (vertices and edges included).
-    for (size_t i = 0; i < leafBoxesOf.size(); ++i) {
-        if (prims_[i].geomId == geometry_.sphereGeomId()) continue;
-        const TriangleMesh& m = geometry_.meshes[prims_[i].geomId];
-        const glm::uvec3& t = m.triangles[prims_[i].primId];
-        constexpr int kGrid = 6;
-        for (int a = 0; a <= kGrid; ++a)
-            for (int b = 0; a + b <= kGrid; ++b) {
-                float u = float(a) / kGrid, v = float(b) / kGrid;
-                Vec3f x = (1.f - u - v) * m.positions[t.x] + u * m.positions[t.y] + v * m.positions[t.z];
-                Bounds3f point;
-                point.extend(x);
-                bool covered = false;
-                for (const Bounds3f& box : leafBoxesOf[i]) covered |= inside(point, box);
-                if (!covered)
-                    return "triangle " + std::to_string(prims_[i].primId) + " not covered by its leaves' boxes at (" +
-                           std::to_string(u) + ", " + std::to_string(v) + ")";
-            }
-    }
-    return {};
+    return checkLeafCoverage(geometry_, prims_, leafBoxesOf);
 }
 
 }  // namespace tessera
