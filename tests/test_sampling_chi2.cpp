@@ -6,6 +6,7 @@
 
 #include <functional>
 
+#include "accel/accel.h"
 #include "core/frame.h"
 #include "core/rng.h"
 #include "core/sampling.h"

@@ -53,11 +53,10 @@ const ShippedScene kScenes[] = {
 
 const char* const kIntegrators[] = {"pt", "ptnee", "lt", "bdpt"};
 
-/// Asset folders: the defaults (TESSERA_ASSETS, fetch cache), plus <source>/../shared/data.
+/// Asset folders: the tests' (TESSERA_ASSETS, fetch cache, <source>/../shared/data).
 SceneLoadOptions loadOptions() {
     SceneLoadOptions o;
-    std::filesystem::path shared = std::filesystem::path(TESSERA_SOURCE_DIR) / ".." / "shared" / "data";
-    if (std::filesystem::exists(shared)) o.assetRoots.push_back(shared.string());
+    o.assetRoots = test::testAssetRoots();
     return o;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 /// \file accel.h
-/// The one interface every ray-tracing backend implements (Embree, brute force; later our own BVH
-/// and k-d tree). Chosen at run time with `--accel NAME`. Integrators only ever see this interface.
+/// The one interface every ray-tracing backend implements (Embree, our BVH with and without spatial
+/// splits, our k-d tree, brute force). Chosen at run time with `--accel NAME`. Integrators only ever
+/// see this interface.
 #include <memory>
 #include <string>
 #include <string_view>
@@ -9,21 +10,10 @@
 
 #include "core/bounds.h"
 #include "core/ray.h"
+#include "geometry/hit.h"
 #include "geometry/shapes.h"
 
 namespace tessera {
-
-/// What a closest-hit query returns. The same record for every backend, so they can be compared
-/// ray by ray: t along the (unnormalised) ray direction; (u, v) barycentrics of vertices 1 and 2 for
-/// triangles (Embree's convention) or spherical (φ/2π, θ/π) for spheres; ids as in SceneGeometry;
-/// `ng` the unit geometric normal (triangles: normalize((p1−p0)×(p2−p0)); spheres: outward).
-struct Hit {
-    float t = kInfinity;
-    float u = 0.f, v = 0.f;
-    uint32_t primId = kInvalidId;
-    uint32_t geomId = kInvalidId;
-    Vec3f ng{0.f};
-};
 
 struct AccelStats {
     double buildSeconds = 0.0;
@@ -32,7 +22,9 @@ struct AccelStats {
 };
 
 struct AccelOptions {
-    int threads = 0;  ///< threads for the build (0 = all); Embree's device gets the same count
+    /// Threads for the builds that run in parallel (0 = all): Embree's device and our BVH's
+    /// object-split build. The k-d tree and spatial-split builds are serial.
+    int threads = 0;
 };
 
 class Accel {

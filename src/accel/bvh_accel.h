@@ -1,13 +1,18 @@
 #pragma once
 /// \file bvh_accel.h
 /// Tessera's own BVH: a binned-SAH binary tree (bvh_builder.h) collapsed into an 8-wide BVH with
-/// structure-of-arrays nodes, SIMD box tests and 4-wide watertight triangle tests. Triangles and
-/// spheres; hit records identical in convention to Embree's (see accel.h).
+/// structure-of-arrays nodes (bvh_accel.cpp), traversed with SIMD box tests and 4-wide watertight
+/// triangle tests (bvh_traversal.cpp). Triangles and spheres; hit records identical in convention
+/// to Embree's (see accel.h).
 #include <string>
 #include <vector>
 
+#include <span>
+
 #include "accel/accel.h"
 #include "accel/bvh_builder.h"
+#include "accel/kernel_isa.h"
+#include "accel/primitive_refs.h"
 #include "core/huge_page_allocator.h"
 
 namespace tessera {
@@ -23,17 +28,15 @@ public:
     Bounds3f bounds() const override { return bounds_; }
     AccelStats stats() const override { return stats_; }
 
-    const BvhConfig& config() const { return config_; }
     /// Which traversal kernels run: "avx2" or "sse2/portable".
-    std::string_view isa() const;
+    std::string_view isa() const { return isa_.name(); }
     /// Runs the portable kernels even where AVX2 is available (tests compare the two), and back.
-    void forcePortableKernels() { useAvx2_ = false; }
-    void allowAvx2Kernels();
+    void forcePortableKernels() { isa_.forcePortable(); }
+    void allowAvx2Kernels() { isa_.useBest(); }
     /// Checks the tree: every primitive with finite bounds reachable exactly once, each child box
     /// inside its parent's box, every primitive inside its leaf's box (with spatial splits: reachable
     /// at least once, and meeting each leaf box that holds it). Returns "" or the first problem.
     std::string checkInvariants() const;
-    size_t nodeCount() const { return nodes_.size(); }
     /// Primitive references in the leaves: the primitive count, or more where spatial splits
     /// placed parts of a primitive in several leaves.
     size_t referenceCount() const;
@@ -53,9 +56,6 @@ public:
         uint32_t geomId[4];
         uint32_t primId[4];
     };
-    struct PrimRef {
-        uint32_t geomId, primId;
-    };
 
     /// Child reference: inner node (its byte offset in the node array, once built), or a leaf
     /// (kLeafBit). Triangle-only leaf: the first Triangle4 block's byte offset / 16, << 2 | (blocks − 1).
@@ -67,6 +67,7 @@ private:
     /// kCoherent: the child-ordering path for rays whose branches predict well (intersectCoherent).
     template <bool kAvx, bool kCoherent> bool intersectImpl(const Ray& ray, Hit& hit) const;
     template <bool kAvx> bool occludedImpl(const Ray& ray) const;
+    // The kernels compiled for AVX2: defined, and called, on x86 only.
     bool intersectAvx2(const Ray& ray, Hit& hit) const;
     bool intersectCoherentAvx2(const Ray& ray, Hit& hit) const;
     bool occludedAvx2(const Ray& ray) const;
@@ -79,6 +80,10 @@ private:
     }
     /// The inner node an inner child reference (a byte offset into nodes_) names.
     const Node8& node(uint32_t ref) const { return *reinterpret_cast<const Node8*>(reinterpret_cast<const char*>(nodes_.data()) + ref); }
+    /// The binary tree over the gathered primitives (prims_, boxes `primBounds`).
+    BinaryBvh buildBinaryTree(std::span<const Bounds3f> primBounds, const AccelOptions& options) const;
+    /// Collapses the binary tree into nodes_, triangles_ and mixedPrims_.
+    void buildWideTree(const BinaryBvh& bin);
     uint32_t collapse(const BinaryBvh& bin, uint32_t binNode);
     uint32_t makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf);
 
@@ -90,7 +95,7 @@ private:
     std::vector<PrimRef> mixedPrims_;
     Bounds3f bounds_;
     AccelStats stats_;
-    bool useAvx2_ = false;
+    KernelIsa isa_;
 };
 
 }  // namespace tessera

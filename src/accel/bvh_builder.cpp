@@ -10,15 +10,13 @@
 #include <cstring>
 #include <tuple>
 
-#include "accel/bvh_simd.h"
+#include "accel/bvh_binning.h"
 
 namespace tessera {
 namespace {
 
 using simd::Vf4;
 using simd::Vi4;
-
-constexpr int kMaxBins = 32;
 
 /// One primitive as the builder moves it around: box and centroid in SIMD registers, the primitive
 /// index in the box's unused fourth lane. Partitioning these records (not indices into the caller's
@@ -29,75 +27,6 @@ struct alignas(16) Ref {
         uint32_t i;
         std::memcpy(&i, reinterpret_cast<const char*>(&lo) + 12, 4);
         return i;
-    }
-};
-
-TESSERA_INLINE Vf4 vmin(Vf4 a, Vf4 b) { return a < b ? a : b; }
-TESSERA_INLINE Vf4 vmax(Vf4 a, Vf4 b) { return a > b ? a : b; }
-
-/// An axis-aligned box in SIMD form (lanes x, y, z; lane 3 ignored).
-struct Box {
-    Vf4 lo = simd::splat4(kInfinity), hi = simd::splat4(-kInfinity);
-    TESSERA_INLINE void extend(Vf4 l, Vf4 h) { lo = vmin(lo, l), hi = vmax(hi, h); }
-    TESSERA_INLINE void extend(const Box& b) { extend(b.lo, b.hi); }
-    bool empty() const { return lo[0] > hi[0] || lo[1] > hi[1] || lo[2] > hi[2]; }
-    /// Half the surface area: SAH only compares ratios, and empty boxes count as 0.
-    float halfArea() const {
-        if (empty()) return 0.f;
-        Vf4 d = hi - lo;
-        return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
-    }
-    Bounds3f bounds() const {
-        Bounds3f b;
-        b.lower = Vec3f(lo[0], lo[1], lo[2]);
-        b.upper = Vec3f(hi[0], hi[1], hi[2]);
-        return b;
-    }
-};
-
-/// Per-axis bins of one node: box and count of the primitives whose centroid falls in each bin.
-struct Binning {
-    // Plain SIMD arrays (trivially constructible), initialised for the bins in use only: small
-    // nodes are the majority and clearing 3 × kMaxBins boxes each time dominated the build.
-    Vf4 lo[3][kMaxBins], hi[3][kMaxBins];
-    uint32_t counts[3][kMaxBins];
-
-    explicit Binning(int binCount = kMaxBins) {
-        for (int a = 0; a < 3; ++a)
-            for (int i = 0; i < binCount; ++i) lo[a][i] = simd::splat4(kInfinity), hi[a][i] = simd::splat4(-kInfinity), counts[a][i] = 0;
-    }
-    TESSERA_INLINE void add(int axis, int bin, Vf4 l, Vf4 h) {
-        lo[axis][bin] = vmin(lo[axis][bin], l);
-        hi[axis][bin] = vmax(hi[axis][bin], h);
-        ++counts[axis][bin];
-    }
-    void merge(const Binning& o, int binCount) {
-        for (int a = 0; a < 3; ++a)
-            for (int i = 0; i < binCount; ++i) {
-                lo[a][i] = vmin(lo[a][i], o.lo[a][i]);
-                hi[a][i] = vmax(hi[a][i], o.hi[a][i]);
-                counts[a][i] += o.counts[a][i];
-            }
-    }
-};
-
-/// Maps a centroid to its bin on each axis: k · (c − min) / extent, clamped (Wald 2007, eq. 1). The
-/// same function bins and partitions, so a chosen split can never leave a side empty.
-struct BinMapping {
-    Vf4 lower, scale;
-    int binCount;
-    BinMapping(const Box& centroidBox, int bins) : lower(centroidBox.lo), binCount(bins) {
-        Vf4 extent = centroidBox.hi - centroidBox.lo;
-        for (int a = 0; a < 4; ++a) scale[a] = (a < 3 && extent[a] > 0.f) ? float(bins) * (1.f - 1e-6f) / extent[a] : 0.f;
-    }
-    TESSERA_INLINE Vi4 bins(Vf4 c) const {
-        Vi4 i = __builtin_convertvector((c - lower) * scale, Vi4);
-        Vi4 zero{}, top = Vi4{} + (binCount - 1);
-        i = i < zero ? zero : i;
-        return i > top ? top : i;
-    }
-    TESSERA_INLINE int bin(Vf4 c, int axis) const {
-        return std::clamp(int((c[axis] - lower[axis]) * scale[axis]), 0, binCount - 1);
     }
 };
 
@@ -141,7 +70,7 @@ private:
     std::vector<Ref> refs_;
     std::atomic<uint32_t> maxDepth_{0};
 
-    float blocks(uint32_t n) const { return float((n + uint32_t(config_.sahBlockSize) - 1) / uint32_t(config_.sahBlockSize)); }
+    float blocks(uint32_t n) const { return sahBlocks(n, config_.sahBlockSize); }
 
     void binRange(uint32_t begin, uint32_t end, const BinMapping& map, Binning& bins) const {
         uint32_t i = begin;
@@ -193,47 +122,6 @@ private:
             });
     }
 
-    struct Split {
-        int axis = -1, bin = 0;
-        float cost = kInfinity;
-        Box left, right;
-    };
-
-    /// Sweeps the bins of each axis from both ends and returns the cheapest plane (in units of
-    /// half-area × blocks; the node's constant terms are added by the caller) with both child boxes.
-    Split findSplit(const Binning& bins, int k) const {
-        Split best;
-        for (int a = 0; a < 3; ++a) {
-            // Plain arrays, written only for the k bins in use: default-constructing 32 boxes per
-            // axis per node cost more than the sweep itself on the many small nodes.
-            float rightCost[kMaxBins];
-            Vf4 rightLo[kMaxBins], rightHi[kMaxBins];
-            Box acc;
-            uint32_t count = 0;
-            for (int i = k - 1; i > 0; --i) {
-                acc.extend(bins.lo[a][i], bins.hi[a][i]);
-                count += bins.counts[a][i];
-                rightCost[i] = acc.halfArea() * blocks(count);
-                rightLo[i] = acc.lo, rightHi[i] = acc.hi;
-            }
-            acc = Box();
-            count = 0;
-            uint32_t total = 0;
-            for (int i = 0; i < k; ++i) total += bins.counts[a][i];
-            for (int i = 1; i < k; ++i) {
-                acc.extend(bins.lo[a][i - 1], bins.hi[a][i - 1]);
-                count += bins.counts[a][i - 1];
-                if (count == 0 || count == total) continue;
-                float cost = acc.halfArea() * blocks(count) + rightCost[i];
-                if (cost < best.cost) {  // strict: lowest axis, then bin, wins ties
-                    best.axis = a, best.bin = i, best.cost = cost;
-                    best.left = acc, best.right.lo = rightLo[i], best.right.hi = rightHi[i];
-                }
-            }
-        }
-        return best;
-    }
-
     void makeLeaf(uint32_t slot, uint32_t begin, uint32_t end, const Box& bounds, uint32_t depth) {
         BvhBuildNode& node = out_.nodes[slot];
         node.bounds = bounds.bounds();
@@ -259,7 +147,7 @@ private:
 
         Ref* refs = refs_.data();
         uint32_t mid = begin;
-        Split split;
+        ObjectSplit split;
         // Fewer bins than primitives cannot find more planes: small nodes use about one per primitive.
         int binCount = std::min(config_.binCount, std::max(4, int(n)));
         BinMapping map(centroidBox, binCount);
@@ -268,7 +156,7 @@ private:
         if (!degenerateCentroids && int(depth) < config_.maxSahDepth) {
             Binning bins(binCount);
             binPrimitives(begin, end, map, bins);
-            split = findSplit(bins, binCount);
+            split = findObjectSplit(bins, binCount, config_.sahBlockSize);
             float area = bounds.halfArea();
             float leafCost = config_.intersectionCost * blocks(n);
             float splitCost = area > 0.f ? config_.traversalCost + config_.intersectionCost * split.cost / area : kInfinity;

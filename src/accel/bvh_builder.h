@@ -17,7 +17,7 @@ namespace tessera {
 /// Parameters of the binned SAH build (Wald 2007, "On fast Construction of SAH-based Bounding Volume
 /// Hierarchies": cost = C_trav + C_isect · (A_L·N_L + A_R·N_R) / A, with the primitive counts
 /// rounded up to whole leaf blocks as Embree does, because a leaf tests `sahBlockSize` primitives at
-/// once). Defaults measured on the Stanford dragon with the BVH8 traversal of bvh_accel.cpp.
+/// once). Defaults chosen on the Stanford dragon with the BVH8 traversal of bvh_traversal.cpp.
 struct BvhConfig {
     /// Cost of visiting one (binary) node, relative to intersectionCost.
     float traversalCost = 1.0f;
@@ -26,9 +26,8 @@ struct BvhConfig {
     /// Primitives a leaf test handles together (the SIMD width of the leaf test).
     int sahBlockSize = 4;
     /// Largest leaf; larger nodes are always split (at the object median when SAH finds no split).
-    /// Eight (two 4-wide blocks, leaving SAH to choose between one and two) rather than four: on the
-    /// dragon it cut the wide nodes from 72k to 48k and memory from 68.0 to 59.9 B/prim, built 7–10%
-    /// faster and traced diffuse and shadow rays 1–4% faster (same-process A/B, writeup §8b).
+    /// Eight (two 4-wide blocks, leaving SAH to choose between one and two) rather than four: fewer
+    /// wide nodes and less memory, faster to build and to trace on the dragon (docs/perf-log.md).
     int maxLeafSize = 8;
     /// Number of centroid bins per axis (all three axes are binned); 16–32 is the usual range.
     int binCount = 32;

@@ -4,10 +4,13 @@
 #include <cmath>
 #include <vector>
 
+#include "accel/bvh_binning.h"
+
 namespace tessera {
 namespace {
 
-constexpr int kBins = 32;
+/// Bins per axis, for object and spatial splits alike.
+constexpr int kBins = kMaxBins;
 
 /// A reference: one primitive, or the part of it inside a box after spatial splits.
 struct SRef {
@@ -16,23 +19,9 @@ struct SRef {
     Vec3f centroid() const { return box.center(); }
 };
 
-/// Half the surface area (SAH compares ratios); 0 for an empty box.
-float halfArea(const Bounds3f& b) {
-    if (b.empty()) return 0.f;
-    Vec3f d = b.upper - b.lower;
-    return d.x * d.y + d.y * d.z + d.z * d.x;
-}
-
 Bounds3f unite(Bounds3f a, const Bounds3f& b) {
     a.extend(b);
     return a;
-}
-
-Bounds3f intersectBoxes(const Bounds3f& a, const Bounds3f& b) {
-    Bounds3f r;
-    r.lower = glm::max(a.lower, b.lower);
-    r.upper = glm::min(a.upper, b.upper);
-    return r;
 }
 
 struct Choice {
@@ -79,7 +68,7 @@ public:
         Bounds3f bounds;
         for (size_t i = 0; i < n; ++i) refs[i] = {primBounds_[i], uint32_t(i)}, bounds.extend(primBounds_[i]);
         budget_ = size_t(double(n) * std::max(0.f, config_.spatialSplitBudget));
-        rootHalfArea_ = halfArea(bounds);
+        rootHalfArea_ = bounds.halfArea();
         // Every split adds two nodes and at most one reference: 2 · (n + budget) − 1 slots suffice.
         out_.nodes.allocate(2 * (n + budget_) - 1);
         out_.primIndices.reserve(n + budget_);
@@ -97,7 +86,7 @@ private:
     float rootHalfArea_ = 0.f;
     uint32_t nextSlot_ = 0, maxDepth_ = 0;
 
-    float blocks(uint32_t n) const { return float((n + uint32_t(config_.sahBlockSize) - 1) / uint32_t(config_.sahBlockSize)); }
+    float blocks(uint32_t n) const { return sahBlocks(n, config_.sahBlockSize); }
 
     uint32_t makeLeaf(const std::vector<SRef>& refs, const Bounds3f& bounds, uint32_t depth) {
         uint32_t slot = nextSlot_++;
@@ -126,28 +115,22 @@ private:
             acc.extend(box[i - 1]);
             cnt += enter[i - 1];
             if (cnt == 0 || rightCount[i] == 0) continue;
-            float cost = halfArea(acc) * blocks(cnt) + halfArea(rightBox[i]) * blocks(rightCount[i]);
+            float cost = acc.halfArea() * blocks(cnt) + rightBox[i].halfArea() * blocks(rightCount[i]);
             if (cost < best.cost) best = {kind, axis, i, cost, acc, rightBox[i], cnt, rightCount[i]};
         }
     }
 
-    /// Binned object split on reference centroids (Wald 2007), as in bvh_builder.cpp.
-    Choice objectSplit(const std::vector<SRef>& refs, const Bounds3f& centroidBox) const {
-        Choice best;
-        for (int a = 0; a < 3; ++a) {
-            float extent = centroidBox.upper[a] - centroidBox.lower[a];
-            if (!(extent > 0.f)) continue;
-            float scale = float(kBins) * (1.f - 1e-6f) / extent;
-            Bounds3f box[kBins];
-            uint32_t count[kBins] = {};
-            for (const SRef& r : refs) {
-                int b = std::clamp(int((r.centroid()[a] - centroidBox.lower[a]) * scale), 0, kBins - 1);
-                box[b].extend(r.box);
-                ++count[b];
-            }
-            sweep(box, count, count, Choice::kObject, a, best);
+    /// The binned object split on reference centroids (bvh_binning.h, as in the object-split build).
+    Choice objectSplit(const std::vector<SRef>& refs, const BinMapping& map) const {
+        Binning bins(kBins);
+        for (const SRef& r : refs) {
+            Box box = toBox(r.box);
+            Vi4 b = map.bins(toVf4(r.centroid()));
+            for (int a = 0; a < 3; ++a) bins.add(a, b[a], box.lo, box.hi);
         }
-        return best;
+        ObjectSplit s = findObjectSplit(bins, kBins, config_.sahBlockSize);
+        if (s.axis < 0) return {};
+        return {Choice::kObject, s.axis, s.bin, s.cost, s.left.bounds(), s.right.bounds(), s.leftCount, s.rightCount};
     }
 
     float planePosition(const Bounds3f& bounds, int axis, int i) const {
@@ -165,7 +148,7 @@ private:
         return s;
     }
     Bounds3f clipRef(const SRef& r, const Bounds3f& box) const {
-        return intersectBoxes(clip_(r.prim, intersectBoxes(box, r.box)), r.box);
+        return clip_(r.prim, box.intersection(r.box)).intersection(r.box);
     }
 
     /// Chopped binning of the references into uniform slabs of the node (paper, Section 4.2): each
@@ -188,7 +171,7 @@ private:
                         Bounds3f s = slab(bounds, a, b, b + 1);
                         const Vec3f* v = &triangles_[3 * size_t(r.prim)];
                         if (!std::isnan(v[0].x)) s = triangleSlabBounds(v, a, s.lower[a], s.upper[a]);
-                        box[b].extend(intersectBoxes(r.box, s));
+                        box[b].extend(r.box.intersection(s));
                     }
                 ++enter[b0];
                 ++exit[b1];
@@ -219,9 +202,9 @@ private:
                     (l.empty() ? nl : nr) -= 1.f;
                     continue;
                 }
-                float costSplit = budget_ > 0 ? halfArea(leftBox) * nl + halfArea(rightBox) * nr : kInfinity;
-                float costLeft = halfArea(unite(leftBox, r.box)) * nl + halfArea(rightBox) * (nr - 1.f);
-                float costRight = halfArea(leftBox) * (nl - 1.f) + halfArea(unite(rightBox, r.box)) * nr;
+                float costSplit = budget_ > 0 ? leftBox.halfArea() * nl + rightBox.halfArea() * nr : kInfinity;
+                float costLeft = unite(leftBox, r.box).halfArea() * nl + rightBox.halfArea() * (nr - 1.f);
+                float costRight = leftBox.halfArea() * (nl - 1.f) + unite(rightBox, r.box).halfArea() * nr;
                 if (costSplit <= costLeft && costSplit <= costRight) {
                     left.push_back({l, r.prim});
                     right.push_back({rt, r.prim});
@@ -243,11 +226,12 @@ private:
         for (const SRef& r : refs) centroidBox.extend(r.centroid());
 
         Choice choice;
+        const BinMapping map(toBox(centroidBox), kBins);
         if (int(depth) < config_.maxSahDepth) {
-            choice = objectSplit(refs, centroidBox);
+            choice = objectSplit(refs, map);
             // Spatial splits only where the object split's children overlap (paper, Section 4.5).
             if (budget_ > 0 && rootHalfArea_ > 0.f && choice.kind != Choice::kNone) {
-                float overlap = halfArea(intersectBoxes(choice.left, choice.right));
+                float overlap = choice.left.intersection(choice.right).halfArea();
                 if (overlap > config_.spatialSplitAlpha * rootHalfArea_) {
                     Choice spatial = spatialSplit(refs, bounds);
                     if (spatial.cost < choice.cost) choice = spatial;
@@ -255,7 +239,7 @@ private:
             } else if (budget_ > 0 && choice.kind == Choice::kNone) {
                 choice = spatialSplit(refs, bounds);  // identical centroids: only a spatial split can help
             }
-            float area = halfArea(bounds);
+            float area = bounds.halfArea();
             float leafCost = config_.intersectionCost * blocks(n);
             float splitCost = area > 0.f && choice.kind != Choice::kNone
                                   ? config_.traversalCost + config_.intersectionCost * choice.cost / area
@@ -270,10 +254,8 @@ private:
         if (choice.kind == Choice::kSpatial) done = partitionSpatial(refs, bounds, choice, left, right);
         if (!done && choice.kind == Choice::kObject) {
             left.clear(), right.clear();
-            int a = choice.axis;
-            float scale = float(kBins) * (1.f - 1e-6f) / (centroidBox.upper[a] - centroidBox.lower[a]);
             for (const SRef& r : refs)
-                (std::clamp(int((r.centroid()[a] - centroidBox.lower[a]) * scale), 0, kBins - 1) < choice.bin ? left : right).push_back(r);
+                (map.bin(toVf4(r.centroid()), choice.axis) < choice.bin ? left : right).push_back(r);
             done = !left.empty() && !right.empty();
         }
         if (!done) {

@@ -151,12 +151,9 @@ EmbreeAccel::EmbreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
     rtcSetDeviceMemoryMonitorFunction(device, nullptr, nullptr);
     stats_.memoryBytes = size_t(std::max<int64_t>(0, liveBytes.load(std::memory_order_acquire)));
 
-    RTCBounds b;
-    rtcGetSceneBounds(scene, &b);
     bounds_ = geometry.bounds();
     stats_.primitives = geometry.primitiveCount();
     stats_.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    (void)b;
 }
 
 EmbreeAccel::~EmbreeAccel() {

@@ -1,129 +1,98 @@
+/// \file kdtree_accel.cpp
+/// Building the k-d tree: the binary SAH tree (kdtree_builder.h), its leaves turned into blocks of
+/// eight triangles, the tree collapsed into wide nodes (kdtree_wide.h); and the tree's invariant
+/// check. The traversal kernels are in kdtree_traversal.cpp.
 #include "accel/kdtree_accel.h"
-
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
+
+#include "accel/triangle_simd.h"
 
 namespace tessera {
 
-namespace {
-
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-}  // namespace
-
-KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& options, const KdConfig& config)
+KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& /*options: the build is serial*/,
+                         const KdConfig& config)
     : geometry_(geometry), config_(config) {
     auto start = std::chrono::steady_clock::now();
-#if defined(__x86_64__) || defined(__i386__)
-    useAvx2_ = __builtin_cpu_supports("avx2");
-#endif
     bounds_ = geometry.bounds();
-
-    std::vector<Bounds3f> primBounds;
-    size_t total = geometry.primitiveCount();
-    prims_.reserve(total);
-    primBounds.reserve(total);
-    for (uint32_t g = 0; g < geometry.meshes.size(); ++g) {
-        const TriangleMesh& mesh = geometry.meshes[g];
-        for (uint32_t i = 0; i < mesh.triangles.size(); ++i) {
-            const glm::uvec3& t = mesh.triangles[i];
-            const Vec3f &p0 = mesh.positions[t.x], &p1 = mesh.positions[t.y], &p2 = mesh.positions[t.z];
-            Bounds3f b;
-            b.extend(p0), b.extend(p1), b.extend(p2);
-            // Exact boxes: padding them would make neighbours sharing a vertex straddle every plane
-            // through it. The traversal is conservative instead (kdtree_traversal.cpp).
-            if (!finiteBounds(b)) continue;  // a non-finite vertex can never be hit
-            prims_.push_back({g, i});
-            primBounds.push_back(b);
-        }
-    }
-    for (uint32_t i = 0; i < geometry.spheres.size(); ++i) {
-        Bounds3f b = paddedSphereBounds(geometry.spheres[i]);
-        if (!finiteBounds(b) || !(geometry.spheres[i].radius > 0.f)) continue;
-        prims_.push_back({geometry.sphereGeomId(), i});
-        primBounds.push_back(b);
-    }
-
-    // Perfect splits: the triangle clipped to the cell (in double, rounded outward). Spheres keep
-    // their box (the builder intersects it with the cell).
-    KdClipFunction clip = [&](uint32_t prim, const Bounds3f& cell) -> Bounds3f {
-        PrimRef ref = prims_[prim];
-        if (ref.geomId == geometry_.sphereGeomId()) return primBounds[prim];
-        const TriangleMesh& mesh = geometry_.meshes[ref.geomId];
-        const glm::uvec3& t = mesh.triangles[ref.primId];
-        const Vec3f &p0 = mesh.positions[t.x], &p1 = mesh.positions[t.y], &p2 = mesh.positions[t.z];
-        return clipTriangleBounds(p0, p1, p2, cell);
-    };
-    KdTree tree;
-    auto buildTree = [&] { tree = buildKdTree(primBounds, clip, config_); };
-    if (options.threads > 0) tbb::task_arena(options.threads).execute(buildTree);
-    else buildTree();
+    // Exact boxes: padding them would make neighbours sharing a vertex straddle every plane through
+    // it. The traversal is conservative instead (kdtree_traversal.cpp).
+    GatheredPrimitives gathered = gatherPrimitives(geometry, /*padTriangles=*/false);
+    prims_ = std::move(gathered.refs);
+    KdTree tree = buildBinaryTree(gathered.bounds);
     rootCell_ = tree.bounds;
     sceneMagnitude_ = std::max(maxComponent(glm::abs(rootCell_.lower)), maxComponent(glm::abs(rootCell_.upper)));
     if (!std::isfinite(sceneMagnitude_)) sceneMagnitude_ = 0.f;
     buildStats_ = tree.stats;
-
-    // Leaves become blocks of kLanes triangles (or a scalar list when a sphere is among them), and
-    // their references the slots of the wide nodes.
     nodes_ = std::move(tree.nodes);
     primIndices_ = std::move(tree.primIndices);
-    leafRefs_.assign(nodes_.size(), kKdNoLeaf);
-    triangles_.reserve(primIndices_.size() / 2 + 1);
-    auto tableRef = [&](KdLeafRecord rec) {
-        if (leafTable_.size() >= kKdRefIndexLimit) throw std::runtime_error("kdtree: more than 2^26 large leaves");
-        leafTable_.push_back(rec);
-        return kKdLeafBit | uint32_t(leafTable_.size() - 1) << 6;
-    };
-    for (size_t i = 0; i < nodes_.size(); ++i) {
-        const KdNode& node = nodes_[i];
-        if (!node.isLeaf()) continue;
-        uint32_t first = node.word0, count = node.word1 >> 2;
-        if (count == 0) continue;  // empty: no slot in the wide nodes
-        bool allTriangles = true;
-        for (uint32_t k = 0; k < count; ++k) allTriangles &= prims_[primIndices_[first + k]].geomId != geometry_.sphereGeomId();
-        if (!allTriangles) {
-            leafRefs_[i] = tableRef({uint32_t(mixedPrims_.size()), count << 1 | kMixedFlag});
-            for (uint32_t k = 0; k < count; ++k) mixedPrims_.push_back(prims_[primIndices_[first + k]]);
-            continue;
-        }
-        uint32_t blocks = (count + kLanes - 1) / kLanes, firstBlock = uint32_t(triangles_.size());
-        leafRefs_[i] = blocks <= kKdMaxInlineBlocks && firstBlock < kKdRefIndexLimit ? kKdLeafBit | blocks << 2 | firstBlock << 6
-                                                                                      : tableRef({firstBlock, blocks << 1});
-        for (uint32_t b = 0; b < blocks; ++b) {
-            TriangleBlock& t4 = triangles_.emplace_back();
-            for (int lane = 0; lane < kLanes; ++lane) {
-                uint32_t k = b * kLanes + uint32_t(lane);
-                if (k >= count) {
-                    for (int v = 0; v < 3; ++v)
-                        for (int a = 0; a < 3; ++a) t4.p[v][a][lane] = kNaN;
-                    blockIds_.push_back({kInvalidId, kInvalidId});
-                    continue;
-                }
-                PrimRef ref = prims_[primIndices_[first + k]];
-                const TriangleMesh& mesh = geometry_.meshes[ref.geomId];
-                const glm::uvec3& tri = mesh.triangles[ref.primId];
-                for (int v = 0; v < 3; ++v)
-                    for (int a = 0; a < 3; ++a) t4.p[v][a][lane] = mesh.positions[tri[v]][a];
-                blockIds_.push_back(ref);
-            }
-        }
-    }
-    triangles_.shrink_to_fit();
-    blockIds_.shrink_to_fit();
+    buildLeafBlocks();
     wide_ = collapseKdTree(nodes_, leafRefs_);
 
-    stats_.primitives = total;
+    stats_.primitives = geometry.primitiveCount();
     // What the traversal reads: wide nodes, leaf table and leaf blocks (the binary nodes are kept
     // for the invariant checks only).
     stats_.memoryBytes = wide_.size() * sizeof(KdWideNode) + leafTable_.size() * sizeof(KdLeafRecord) +
                          triangles_.size() * sizeof(TriangleBlock) + blockIds_.size() * sizeof(PrimRef) +
                          mixedPrims_.size() * sizeof(PrimRef);
     stats_.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+KdTree KdTreeAccel::buildBinaryTree(std::span<const Bounds3f> primBounds) const {
+    // Perfect splits: the triangle clipped to the cell (in double, rounded outward). Spheres keep
+    // their box (the builder intersects it with the cell).
+    KdClipFunction clip = [&](uint32_t prim, const Bounds3f& cell) -> Bounds3f {
+        PrimRef ref = prims_[prim];
+        if (ref.geomId == geometry_.sphereGeomId()) return primBounds[prim];
+        Vec3f v[3];
+        triangleVertices(geometry_, ref, v);
+        return clipTriangleBounds(v[0], v[1], v[2], cell);
+    };
+    return buildKdTree(primBounds, clip, config_);
+}
+
+uint32_t KdTreeAccel::tableRef(KdLeafRecord rec) {
+    if (leafTable_.size() >= kKdRefIndexLimit) throw std::runtime_error("kdtree: more than 2^26 large leaves");
+    leafTable_.push_back(rec);
+    return kKdLeafBit | uint32_t(leafTable_.size() - 1) << 6;
+}
+
+void KdTreeAccel::buildLeafBlocks() {
+    // Leaves become blocks of kLanes triangles (or a scalar list when a sphere is among them), and
+    // their references the slots of the wide nodes.
+    leafRefs_.assign(nodes_.size(), kKdNoLeaf);
+    triangles_.reserve(primIndices_.size() / 2 + 1);
+    for (size_t i = 0; i < nodes_.size(); ++i) {
+        const KdNode& node = nodes_[i];
+        if (!node.isLeaf()) continue;
+        uint32_t first = node.word0, count = node.word1 >> 2;
+        if (count == 0) continue;  // empty: no slot in the wide nodes
+        leafRefs_[i] = makeLeaf(&primIndices_[first], count);
+    }
+    triangles_.shrink_to_fit();
+    blockIds_.shrink_to_fit();
+}
+
+uint32_t KdTreeAccel::makeLeaf(const uint32_t* order, uint32_t count) {
+    if (!allTriangles(geometry_, prims_, order, count)) {
+        uint32_t ref = tableRef({uint32_t(mixedPrims_.size()), count << 1 | kMixedFlag});
+        for (uint32_t k = 0; k < count; ++k) mixedPrims_.push_back(prims_[order[k]]);
+        return ref;
+    }
+    uint32_t blocks = (count + kLanes - 1) / kLanes, firstBlock = uint32_t(triangles_.size());
+    uint32_t ref = blocks <= kKdMaxInlineBlocks && firstBlock < kKdRefIndexLimit ? kKdLeafBit | blocks << 2 | firstBlock << 6
+                                                                                  : tableRef({firstBlock, blocks << 1});
+    for (uint32_t b = 0; b < blocks; ++b) {
+        TriangleBlock& block = triangles_.emplace_back();
+        uint32_t inBlock = std::min(uint32_t(kLanes), count - b * kLanes);
+        fillTriangleLanes(geometry_, prims_, order + b * kLanes, inBlock, block.p);
+        for (uint32_t lane = 0; lane < uint32_t(kLanes); ++lane)
+            blockIds_.push_back(lane < inBlock ? prims_[order[b * kLanes + lane]] : PrimRef{kInvalidId, kInvalidId});
+    }
+    return ref;
 }
 
 uint64_t KdTreeAccel::structureHash() const {
@@ -193,15 +162,14 @@ std::string KdTreeAccel::checkInvariants() const {
     for (uint32_t prim = 0; prim < prims_.size(); ++prim) {
         PrimRef ref = prims_[prim];
         if (ref.geomId == geometry_.sphereGeomId()) continue;
-        const TriangleMesh& mesh = geometry_.meshes[ref.geomId];
-        const glm::uvec3& t = mesh.triangles[ref.primId];
-        const Vec3f &p0 = mesh.positions[t.x], &p1 = mesh.positions[t.y], &p2 = mesh.positions[t.z];
+        Vec3f p[3];
+        triangleVertices(geometry_, ref, p);
         std::vector<std::pair<uint32_t, Bounds3f>> stack{{0u, rootCell_}};
         while (!stack.empty()) {
             auto [index, cell] = stack.back();
             stack.pop_back();
             Vec3d lo, hi;
-            if (!clipTriangleDouble(p0, p1, p2, cell, lo, hi)) continue;
+            if (!clipTriangleDouble(p[0], p[1], p[2], cell, lo, hi)) continue;
             const KdNode& n = nodes_[index];
             if (n.isLeaf()) {
                 auto begin = primIndices_.begin() + n.word0, end = begin + (n.word1 >> 2);

@@ -9,8 +9,12 @@
 #include <string>
 #include <vector>
 
+#include <span>
+
 #include "accel/accel.h"
 #include "accel/kdtree_builder.h"
+#include "accel/kernel_isa.h"
+#include "accel/primitive_refs.h"
 #include "accel/kdtree_wide.h"
 #include "geometry/clip.h"
 
@@ -27,13 +31,11 @@ public:
     Bounds3f bounds() const override { return bounds_; }
     AccelStats stats() const override { return stats_; }
 
-    const KdConfig& config() const { return config_; }
     /// Which traversal runs: "avx2" or "sse2/portable" (the same arithmetic, so the same bits).
-    std::string_view isa() const { return useAvx2_ ? "avx2" : "sse2/portable"; }
+    std::string_view isa() const { return isa_.name(); }
     /// Runs the portable kernels even where AVX2 is available (tests compare the two).
-    void forcePortableKernels() { useAvx2_ = false; }
+    void forcePortableKernels() { isa_.forcePortable(); }
     const KdBuildStats& buildStats() const { return buildStats_; }
-    size_t nodeCount() const { return nodes_.size(); }
     /// The builder's binary nodes (leaf payloads index its references); node 0 is the root.
     const std::vector<KdNode>& nodes() const { return nodes_; }
     /// The wide nodes the traversal runs on (the binary tree collapsed, kdtree_wide.h).
@@ -56,9 +58,6 @@ public:
     struct alignas(32) TriangleBlock {
         float p[3][3][kLanes];
     };
-    struct PrimRef {
-        uint32_t geomId, primId;
-    };
     /// Leaf payload (KdLeafRecord::payload): count << 1 | mixed; mixed leaves (holding a sphere)
     /// list mixedPrims_ entries, the others TriangleBlocks.
     static constexpr uint32_t kMixedFlag = 1u;
@@ -78,12 +77,22 @@ private:
     /// kCoherent: branches on the entered-slot count (camera rays, intersectCoherent).
     template <bool kAvx, bool kCoherent> bool intersectImpl(const Ray& ray, Hit& hit) const;
     template <bool kAvx> bool occludedImpl(const Ray& ray) const;
-    // The same traversal compiled for AVX2 (one instruction per 8-lane leaf step); chosen at run
-    // time, so the default build needs no -march=native.
+    // The same traversal compiled for AVX2 (one instruction per 8-lane leaf step): defined, and
+    // called, on x86 only (kernel_isa.h).
     bool intersectAvx2(const Ray& ray, Hit& hit) const;
     bool intersectCoherentAvx2(const Ray& ray, Hit& hit) const;
     bool occludedAvx2(const Ray& ray) const;
-    bool useAvx2_ = false;
+
+    /// The binary tree over the gathered primitives (prims_, boxes `primBounds`).
+    KdTree buildBinaryTree(std::span<const Bounds3f> primBounds) const;
+    /// Turns the binary tree's leaves into triangle blocks or mixed lists, and leafRefs_.
+    void buildLeafBlocks();
+    /// The wide-node reference of a leaf over prims_[order[0 .. count)], its blocks appended.
+    uint32_t makeLeaf(const uint32_t* order, uint32_t count);
+    /// A leaf-table entry's reference (leaves a reference cannot describe inline).
+    uint32_t tableRef(KdLeafRecord rec);
+
+    KernelIsa isa_;
 
     const SceneGeometry& geometry_;
     KdConfig config_;

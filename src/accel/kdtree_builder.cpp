@@ -61,17 +61,19 @@ inline uint32_t eventPrim(Event e) { return uint32_t(e) & kPrimMask; }
 /// Axis and position: equal for all events of one candidate plane.
 inline uint64_t eventPlane(Event e) { return e >> 30; }
 
-/// The events of one primitive box: start/end per axis, or one planar event where it is flat.
-template <typename Out>
-inline void appendEvents(const Bounds3f& b, uint32_t prim, Out& out) {
-    for (int a = 0; a < 3; ++a) {
-        if (b.lower[a] == b.upper[a]) {
-            out.push_back(makeEvent(a, b.lower[a], kPlanar, prim));
-        } else {
-            out.push_back(makeEvent(a, b.lower[a], kStart, prim));
-            out.push_back(makeEvent(a, b.upper[a], kEnd, prim));
-        }
+/// The events of one primitive box on one axis: start and end, or one planar event where it is flat.
+inline void appendAxisEvents(const Bounds3f& b, int a, uint32_t prim, std::vector<Event>& out) {
+    if (b.lower[a] == b.upper[a]) {
+        out.push_back(makeEvent(a, b.lower[a], kPlanar, prim));
+    } else {
+        out.push_back(makeEvent(a, b.lower[a], kStart, prim));
+        out.push_back(makeEvent(a, b.upper[a], kEnd, prim));
     }
+}
+
+/// The events of one primitive box on all three axes.
+inline void appendEvents(const Bounds3f& b, uint32_t prim, std::vector<Event>& out) {
+    for (int a = 0; a < 3; ++a) appendAxisEvents(b, a, prim, out);
 }
 
 /// Stable LSD radix sort on the key bits above the primitive (axis, position, type): 3 passes of
@@ -122,6 +124,33 @@ struct SplitCandidate {
     bool planarLeft = false;
 };
 
+/// The SAH of the candidate planes on one axis of a cell (KdConfig: W&H Section 3 with the
+/// empty-space bonus): one cost model for the binned and the swept levels.
+struct AxisSah {
+    float lo = 0.f, hi = 0.f;              ///< the cell's extent on the axis
+    float crossArea = 0.f, perimeter = 0.f;  ///< d_b·d_c and d_b + d_c of the other two axes
+    float invArea = 0.f, minEmpty = 0.f;
+
+    AxisSah() = default;
+    AxisSah(const Bounds3f& cell, const Vec3f& d, float invCellArea, int a, float emptyCutMinFraction)
+        : lo(cell.lower[a]), hi(cell.upper[a]), invArea(invCellArea) {
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        crossArea = d[b] * d[c];
+        perimeter = d[b] + d[c];
+        minEmpty = emptyCutMinFraction * (hi - lo);
+    }
+    /// Children's areas relative to the cell's, 2·(len·(d_b + d_c) + d_b·d_c) / A (flat cells,
+    /// d = 0, are fine).
+    float leftFraction(float p) const { return 2.f * ((p - lo) * perimeter + crossArea) * invArea; }
+    float rightFraction(float p) const { return 2.f * ((hi - p) * perimeter + crossArea) * invArea; }
+    /// λ(p)·(C_trav + C_isect·(P_L·B(N_L) + P_R·B(N_R))) for blocks bl = B(N_L), br = B(N_R).
+    float cost(float p, uint32_t cl, uint32_t cr, float bl, float br, const KdConfig& config) const {
+        float c = config.traversalCost + config.intersectionCost * (leftFraction(p) * bl + rightFraction(p) * br);
+        bool emptySide = (cl == 0 && p - lo >= minEmpty) || (cr == 0 && hi - p >= minEmpty);
+        return emptySide ? (1.f - config.emptyBonus) * c : c;
+    }
+};
+
 class KdBuilder {
 public:
     KdBuilder(std::span<const Bounds3f> bounds, const KdClipFunction& clip, const KdConfig& config, KdTree& out)
@@ -134,10 +163,10 @@ public:
     double build(EventList& events, uint32_t count, const Bounds3f& cell, int depth, int badRefines) {
         out_.stats.maxDepth = std::max(out_.stats.maxDepth, depth);
         const float leafCost = config_.intersectionCost * blocks(count);
-        if (count == 0) return makeLeaf(events, 0);
+        if (count == 0) return makeLeaf(events);
         if (depth >= out_.stats.depthLimit) {
             ++out_.stats.depthLimitHits;
-            return makeLeaf(events, count);
+            return makeLeaf(events);
         }
         size_t segment[4];
         out_.stats.eventsSwept += events.size;
@@ -146,7 +175,7 @@ public:
         bool bad = best.cost >= leafCost;
         if (bad) ++badRefines;
         if (best.axis < 0 || (bad && (badRefines > config_.maxBadRefines || (best.cost > 4.f * leafCost && count < 16))))
-            return makeLeaf(events, count);
+            return makeLeaf(events);
 
         // A bad refinement may be retracted: keep its primitives until the subtree is known.
         std::vector<uint32_t> retractPrims;
@@ -221,7 +250,7 @@ public:
             else if (r.box.lower[a] >= best.pos) right.push_back(r);
             else {
                 // Straddling: perfect split, clipped to each child (within its current box).
-                Bounds3f bl = intersect(clipped(r.prim, leftCell), r.box), br = intersect(clipped(r.prim, rightCell), r.box);
+                Bounds3f bl = clipped(r.prim, leftCell).intersection(r.box), br = clipped(r.prim, rightCell).intersection(r.box);
                 if (!bl.empty()) left.push_back({bl, r.prim});
                 if (!br.empty()) right.push_back({br, r.prim});
             }
@@ -238,13 +267,6 @@ public:
     }
 
 private:
-    static Bounds3f intersect(const Bounds3f& a, const Bounds3f& b) {
-        Bounds3f r;
-        r.lower = glm::max(a.lower, b.lower);
-        r.upper = glm::min(a.upper, b.upper);
-        return r;
-    }
-
     /// Binned SAH (min–max binning): per axis, count the references whose box starts in each bin
     /// and those whose box ends in each bin; at the boundary after bin k, N_L = starts in bins ≤ k
     /// and N_R = ends in bins > k. Bin indices round like the plane positions only approximately,
@@ -257,7 +279,6 @@ private:
         const float area = cell.surfaceArea();
         if (!(area > 0.f)) return best;
         const float invArea = 1.f / area;
-        const float kt = config_.traversalCost, ki = config_.intersectionCost, lambdaEmpty = 1.f - config_.emptyBonus;
         const uint32_t count = uint32_t(refs.size());
         binStart_.assign(size_t(3 * nb), 0u);
         binEnd_.assign(size_t(3 * nb), 0u);
@@ -271,20 +292,14 @@ private:
             }
         for (int a = 0; a < 3; ++a) {
             if (!(d[a] > 0.f)) continue;
-            const int b = (a + 1) % 3, c = (a + 2) % 3;
-            const float crossArea = d[b] * d[c], perimeter = d[b] + d[c];
-            const float lo = cell.lower[a], hi = cell.upper[a];
-            const float minEmpty = config_.emptyCutMinFraction * (hi - lo);
+            const AxisSah sah(cell, d, invArea, a, config_.emptyCutMinFraction);
             uint32_t nl = 0, nr = count;
             for (int k = 0; k + 1 < nb; ++k) {
                 nl += binStart_[size_t(a * nb + k)];
                 nr -= binEnd_[size_t(a * nb + k)];
-                const float p = lo + d[a] * float(k + 1) / float(nb);
-                if (!(p > lo && p < hi)) continue;
-                float pl = 2.f * ((p - lo) * perimeter + crossArea) * invArea;
-                float pr = 2.f * ((hi - p) * perimeter + crossArea) * invArea;
-                float cost = kt + ki * (pl * blocks(nl) + pr * blocks(nr));
-                if ((nl == 0 && p - lo >= minEmpty) || (nr == 0 && hi - p >= minEmpty)) cost *= lambdaEmpty;
+                const float p = sah.lo + d[a] * float(k + 1) / float(nb);
+                if (!(p > sah.lo && p < sah.hi)) continue;
+                float cost = sah.cost(p, nl, nr, blocks(nl), blocks(nr), config_);
                 if (cost < best.cost) best = {cost, a, p, true};
             }
         }
@@ -297,14 +312,7 @@ private:
         std::vector<Event> list;
         list.reserve(refs.size() * 6);
         for (int a = 0; a < 3; ++a)
-            for (const Ref& r : refs) {
-                if (r.box.lower[a] == r.box.upper[a]) {
-                    list.push_back(makeEvent(a, r.box.lower[a], kPlanar, r.prim));
-                } else {
-                    list.push_back(makeEvent(a, r.box.lower[a], kStart, r.prim));
-                    list.push_back(makeEvent(a, r.box.upper[a], kEnd, r.prim));
-                }
-            }
+            for (const Ref& r : refs) appendAxisEvents(r.box, a, r.prim, list);
         radixSortEvents(list);
         events.allocate(list.size());
         std::copy(list.begin(), list.end(), events.data.get());
@@ -326,11 +334,9 @@ private:
         segment[1] = segment[2] = segment[3] = events.size;
         if (!(area > 0.f)) return best;  // a cell flat on two axes: no area to split
         const float invArea = 1.f / area;
-        const float kt = config_.traversalCost, ki = config_.intersectionCost;
-        const float lambdaEmpty = 1.f - config_.emptyBonus;
         int axis = -1;
         uint32_t nl = 0, nr = 0;
-        float lo = 0.f, hi = 0.f, crossArea = 0.f, perimeter = 0.f;
+        AxisSah sah;
         const size_t n = events.size;
         size_t i = 0;
         while (i < n) {
@@ -340,10 +346,7 @@ private:
                 for (int s = axis + 1; s <= a; ++s) segment[s] = i;
                 axis = a;
                 nl = 0, nr = count;
-                lo = cell.lower[a], hi = cell.upper[a];
-                int b = (a + 1) % 3, c = (a + 2) % 3;
-                crossArea = d[b] * d[c];
-                perimeter = d[b] + d[c];
+                sah = AxisSah(cell, d, invArea, a, config_.emptyCutMinFraction);
             }
             uint64_t plane = eventPlane(e);
             uint32_t typeCount[3] = {0, 0, 0};
@@ -351,17 +354,9 @@ private:
             uint32_t np = typeCount[kPlanar];
             nr -= typeCount[kPlanar] + typeCount[kEnd];
             float p = eventPos(e);
-            if (p > lo && p < hi) {
-                // Children's areas: 2·(len·(d_b + d_c) + d_b·d_c); flat cells (d = 0) are fine.
-                float pl = 2.f * ((p - lo) * perimeter + crossArea) * invArea;
-                float pr = 2.f * ((hi - p) * perimeter + crossArea) * invArea;
-                const float minEmpty = config_.emptyCutMinFraction * (hi - lo);
-                const bool thickLeft = p - lo >= minEmpty, thickRight = hi - p >= minEmpty;
-                auto sah = [&](uint32_t cl, uint32_t cr) {
-                    float c = kt + ki * (pl * blocks(cl) + pr * blocks(cr));
-                    return ((cl == 0 && thickLeft) || (cr == 0 && thickRight)) ? lambdaEmpty * c : c;
-                };
-                float costLeft = sah(nl + np, nr), costRight = sah(nl, nr + np);
+            if (p > sah.lo && p < sah.hi) {
+                float costLeft = sah.cost(p, nl + np, nr, blocks(nl + np), blocks(nr), config_);
+                float costRight = sah.cost(p, nl, nr + np, blocks(nl), blocks(nr + np), config_);
                 // Planar primitives go to the cheaper side (W&H Section 3.3).
                 if (costLeft < best.cost) best = {costLeft, a, p, true};
                 if (costRight < best.cost) best = {costRight, a, p, false};
@@ -439,9 +434,7 @@ private:
     /// The primitive clipped to the cell (perfect split), always within the cell.
     Bounds3f clipped(uint32_t prim, const Bounds3f& cell) const {
         Bounds3f b = (config_.perfectSplits && clip_) ? clip_(prim, cell) : bounds_[prim];
-        b.lower = glm::max(b.lower, cell.lower);
-        b.upper = glm::min(b.upper, cell.upper);
-        return b;
+        return b.intersection(cell);
     }
 
     std::vector<uint32_t> primsOf(const EventList& events) const {
@@ -453,10 +446,9 @@ private:
         return prims;
     }
 
-    double makeLeaf(EventList& events, uint32_t count) {
+    double makeLeaf(EventList& events) {
         std::vector<uint32_t> prims = primsOf(events);
         events.release();
-        (void)count;
         return emitLeaf(prims);
     }
 
@@ -506,15 +498,7 @@ KdTree buildKdTree(std::span<const Bounds3f> primBounds, const KdClipFunction& c
         events.reserve(6 * n);
         // Per axis, in primitive order: the radix sort is stable, so equal keys stay by primitive.
         for (int a = 0; a < 3; ++a)
-            for (uint32_t i = 0; i < n; ++i) {
-                const Bounds3f& b = primBounds[i];
-                if (b.lower[a] == b.upper[a]) {
-                    events.push_back(makeEvent(a, b.lower[a], kPlanar, i));
-                } else {
-                    events.push_back(makeEvent(a, b.lower[a], kStart, i));
-                    events.push_back(makeEvent(a, b.upper[a], kEnd, i));
-                }
-            }
+            for (uint32_t i = 0; i < n; ++i) appendAxisEvents(primBounds[i], a, i, events);
         radixSortEvents(events);
         EventList root;
         root.allocate(events.size());

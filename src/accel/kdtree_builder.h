@@ -31,7 +31,7 @@ namespace tessera {
 /// Defaults chosen on the Stanford dragons with the traversal of kdtree_traversal.cpp: across the
 /// settings tried (C_trav 1–8, C_isect 1–10, bonus 0–0.5, blocks of 4 or 8) rays/s moved less than
 /// the run-to-run noise, while lower C_trav/C_isect ratios raised memory and build time, so the
-/// defaults favour those (writeup.md §8d).
+/// defaults favour those (the k-d tree section of writeup.md).
 struct KdConfig {
     /// Cost of one traversal step (inner node), relative to intersectionCost.
     float traversalCost = 3.0f;
@@ -78,7 +78,7 @@ struct KdNode {
     bool isLeaf() const { return (word1 & 3u) == 3u; }
     int axis() const { return int(word1 & 3u); }
     uint32_t aboveChild() const { return word1 >> 2; }
-    /// Inline: the traversal reads it at every inner node (an out-of-line call cost ~3% of it).
+    /// The split position (the bits of word0).
     float split() const {
         float f;
         std::memcpy(&f, &word0, 4);

@@ -10,11 +10,11 @@
 #include <cstring>
 #include <limits>
 
-#include "accel/bvh_simd.h"
-#include "accel/mixed_leaf.h"
-#include "accel/triangle_simd.h"
+#include "accel/accel_simd.h"
 #include "accel/kdtree_accel.h"
-#include "geometry/intersect.h"
+#include "accel/mixed_leaf.h"
+#include "accel/robust_bounds.h"
+#include "accel/triangle_simd.h"
 
 namespace tessera {
 
@@ -22,19 +22,6 @@ using namespace simd;
 
 
 namespace {
-
-/// |x| enlarged by two ulps (inf stays inf): Ize 2013's conservative far reciprocal.
-inline float twoUlpsLarger(float x) {
-    uint32_t bits;
-    std::memcpy(&bits, &x, 4);
-    if ((bits & 0x7fffffffu) >= 0x7f7ffffeu) return std::copysign(kInfinity, x);
-    bits += 2;
-    std::memcpy(&x, &bits, 4);
-    return x;
-}
-
-/// t + 4 ulps, for comparisons of two computed distances along the same ray.
-inline float padUp(float t) { return t + std::abs(t) * 0x1p-21f; }
 
 /// A wide node's (and the traversal's) depth is a third of the binary depth; each level pushes at
 /// most 7 entries.
@@ -179,7 +166,7 @@ TESSERA_INLINE bool startRay(const Ray& ray, const Bounds3f& rootCell_, float sc
     // 16 ulps of the largest coordinate involved. Across a plane of axis a that is a distance of
     // eps·|1/d_a| along the ray (large for rays almost parallel to the plane), which pads each
     // plane of every visit decision (enterSlots).
-    const float eps = 0x1p-19f * (sceneMagnitude_ + maxComponent(glm::abs(ray.o)));
+    const float eps = kKdCellPadRelative * (sceneMagnitude_ + maxComponent(glm::abs(ray.o)));
     bool upward[3];
     for (int a = 0; a < 3; ++a) upward[a] = !std::signbit(invD[a]);  // from 1/d, so −0.0 counts as downward
     wideRay = WideRay(ray, invD, upward, eps);
@@ -234,7 +221,7 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
             if (mask) {
                 int nearest;
                 if constexpr (!kCoherent) {
-                    // Incoherent rays (as in the BVH, §8b): one and two entered slots share one
+                    // Incoherent rays (as in the BVH): one and two entered slots share one
                     // branch-free path, the lowest and the highest slot (the same slot when alone,
                     // and its push is then not kept); the order is the loops' below, so both
                     // kernels return the same record.
@@ -299,13 +286,8 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
     }
 done:
     if (bestBlock) {
-        Vec3f p[3];
-        for (int v = 0; v < 3; ++v) p[v] = {bestBlock->p[v][0][bestLane], bestBlock->p[v][1][bestLane], bestBlock->p[v][2][bestLane]};
-        hit.t = tHit, hit.u = bestU, hit.v = bestV;
-        const PrimRef& id = blockIds_[size_t(bestBlock - triangles_.data()) * kLanes + size_t(bestLane)];
-        hit.geomId = id.geomId;
-        hit.primId = id.primId;
-        hit.ng = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
+        const PrimRef id = blockIds_[size_t(bestBlock - triangles_.data()) * kLanes + size_t(bestLane)];
+        triangleHitRecord(bestBlock->p, bestLane, tHit, bestU, bestV, id, hit);
         return true;
     }
     if (bestMixed.geomId != kInvalidId) {
@@ -375,18 +357,27 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
 __attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true, false>(ray, hit); }
 __attribute__((target("avx2"))) bool KdTreeAccel::intersectCoherentAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true, true>(ray, hit); }
 __attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<true>(ray); }
-#else
-bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<false, false>(ray, hit); }
-bool KdTreeAccel::intersectCoherentAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<false, true>(ray, hit); }
-bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<false>(ray); }
 #endif
 
 bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const {
-    return useAvx2_ ? intersectAvx2(ray, hit) : intersectImpl<false, false>(ray, hit);
+#if defined(TESSERA_X86)
+    if (isa_.avx2()) return intersectAvx2(ray, hit);
+#endif
+    return intersectImpl<false, false>(ray, hit);
 }
+
 bool KdTreeAccel::intersectCoherent(const Ray& ray, Hit& hit) const {
-    return useAvx2_ ? intersectCoherentAvx2(ray, hit) : intersectImpl<false, true>(ray, hit);
+#if defined(TESSERA_X86)
+    if (isa_.avx2()) return intersectCoherentAvx2(ray, hit);
+#endif
+    return intersectImpl<false, true>(ray, hit);
 }
-bool KdTreeAccel::occluded(const Ray& ray) const { return useAvx2_ ? occludedAvx2(ray) : occludedImpl<false>(ray); }
+
+bool KdTreeAccel::occluded(const Ray& ray) const {
+#if defined(TESSERA_X86)
+    if (isa_.avx2()) return occludedAvx2(ray);
+#endif
+    return occludedImpl<false>(ray);
+}
 
 }  // namespace tessera

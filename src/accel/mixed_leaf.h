@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "accel/accel.h"
+#include "accel/primitive_refs.h"
 #include "geometry/intersect.h"
 
 namespace tessera {
@@ -16,16 +17,16 @@ struct MixedCandidate {
     float u = 0.f, v = 0.f;  ///< triangles only: barycentrics
 };
 
-/// Tests `count` primitives (anything with geomId/primId members) against (ray.tMin, tHit). On a
-/// closer hit updates tHit and `best` and returns true; with kAnyHit returns true at the first hit.
-template <bool kAnyHit, class Ref>
-inline bool intersectMixedLeaf(const SceneGeometry& g, const Ray& ray, const Ref* prims, uint32_t count,
-                                       float& tHit, MixedCandidate& best) {
+/// Tests `count` primitives against (ray.tMin, tHit). On a closer hit updates tHit and `best` and
+/// returns true; with kAnyHit returns true at the first hit.
+template <bool kAnyHit>
+inline bool intersectMixedLeaf(const SceneGeometry& g, const Ray& ray, const PrimRef* prims, uint32_t count, float& tHit,
+                               MixedCandidate& best) {
     bool found = false;
     Ray clipped = ray;
     for (uint32_t k = 0; k < count; ++k) {
         clipped.tMax = tHit;
-        const Ref& p = prims[k];
+        const PrimRef& p = prims[k];
         if (p.geomId == g.sphereGeomId()) {
             const Sphere& s = g.spheres[p.primId];
             double t = intersectSphere(s.center, s.radius, clipped);

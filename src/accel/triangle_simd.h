@@ -9,10 +9,13 @@
 /// `target("avx2")` code and two SSE halves elsewhere.
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <utility>
 
-#include "accel/bvh_simd.h"
+#include "accel/accel_simd.h"
+#include "accel/primitive_refs.h"
 #include "core/ray.h"
+#include "geometry/hit.h"
 
 namespace tessera {
 
@@ -103,8 +106,8 @@ TESSERA_INLINE TriangleCandidate intersectTriangles(const TriRayW<W>& r, const f
     F det = U + V + Wf;
     I valid = sameSign & (det != zero);
     // The closest-hit test leaves here when no lane can hit (it saves the division); the any-hit
-    // test goes straight on to its single final branch (+1–2% on shadow rays: this exit was
-    // mispredicted more often than the division cost).
+    // test goes straight on to its single final branch: there this exit is mispredicted more often
+    // than the division costs.
     if constexpr (!kAnyHit)
         if (!L::mask(valid)) return {0.f, 0.f, 0.f, -1};
     F T = U * (sz * aZ) + V * (sz * bZ) + Wf * (sz * cZ);
@@ -120,6 +123,33 @@ TESSERA_INLINE TriangleCandidate intersectTriangles(const TriRayW<W>& r, const f
         if (t[i] < best.t) best = {t[i], V[i] * invDet[i], Wf[i] * invDet[i], i};
     }
     return best;
+}
+
+/// Fills the W lanes of a leaf block, p[vertex][axis][lane], with the vertices of `count` ≤ W
+/// triangles `refs[order[0 .. count)]`; the remaining lanes get NaN vertices, which the test
+/// rejects (no lane mask needed).
+template <int W>
+inline void fillTriangleLanes(const SceneGeometry& g, const std::vector<PrimRef>& refs, const uint32_t* order,
+                              uint32_t count, float (&p)[3][3][W]) {
+    for (int lane = 0; lane < W; ++lane) {
+        Vec3f v[3] = {Vec3f(std::numeric_limits<float>::quiet_NaN()), Vec3f(std::numeric_limits<float>::quiet_NaN()),
+                      Vec3f(std::numeric_limits<float>::quiet_NaN())};
+        if (uint32_t(lane) < count) triangleVertices(g, refs[order[lane]], v);
+        for (int k = 0; k < 3; ++k)
+            for (int a = 0; a < 3; ++a) p[k][a][lane] = v[k][a];
+    }
+}
+
+/// The hit record of lane `lane` of a leaf block hit at (t, u, v): the normal from the block's own
+/// vertices, as every backend computes it (accel.h).
+template <int W>
+TESSERA_INLINE void triangleHitRecord(const float (&p)[3][3][W], int lane, float t, float u, float v, PrimRef id, Hit& hit) {
+    Vec3f q[3];
+    for (int k = 0; k < 3; ++k) q[k] = {p[k][0][lane], p[k][1][lane], p[k][2][lane]};
+    hit.t = t, hit.u = u, hit.v = v;
+    hit.geomId = id.geomId;
+    hit.primId = id.primId;
+    hit.ng = glm::normalize(glm::cross(q[1] - q[0], q[2] - q[0]));
 }
 
 }  // namespace tessera

@@ -11,7 +11,7 @@
 #include <stdexcept>
 
 #include "accel/accel.h"
-#include "accel/validate.h"
+#include "validation/validate.h"
 #include "core/error.h"
 #include "core/version.h"
 #include "scene/mesh_loader.h"

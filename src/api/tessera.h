@@ -119,7 +119,7 @@ using IntersectFn = std::function<bool(const Ray&, Hit&)>;
 using OccludedFn = std::function<bool(const Ray&)>;
 
 struct ValidationOptions {
-    /// Any of "primary", "random", "diffuse", "grazing" (see `tessera validate-accel --help`).
+    /// Any of "primary", "random", "diffuse", "grazing", "shadow" (see `tessera validate-accel --help`).
     std::vector<std::string> kinds{"primary", "random", "diffuse", "grazing"};
     size_t rays = 1000000;  ///< in all, split evenly over the kinds
     uint64_t seed = 1;

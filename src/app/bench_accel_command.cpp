@@ -17,13 +17,10 @@
 
 #include "accel/bvh_accel.h"
 #include "accel/kdtree_accel.h"
-#include "accel/validate.h"
 #include "app/commands.h"
 #include "core/error.h"
-#include "core/frame.h"
-#include "core/rng.h"
-#include "core/sampling.h"
 #include "scene/mesh_loader.h"
+#include "validation/ray_sets.h"
 
 namespace tessera::app {
 namespace {
@@ -42,6 +39,8 @@ double median(std::vector<double> v) {
     return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
 }
 
+/// The benchmark's three ray sets, from the one generator validate-accel uses: primary rays in pixel
+/// order, diffuse bounces from their hits in random order, shadow rays from their hits.
 struct RaySets {
     std::vector<Ray> primary, diffuse, shadow;
     const std::vector<Ray>& get(const std::string& kind) const {
@@ -49,37 +48,12 @@ struct RaySets {
     }
 };
 
-/// Primary rays through every pixel centre; from their hits (found with `oracle`), one cosine bounce
-/// each (shuffled, so consecutive rays are incoherent) and one shadow ray to a random point on the
-/// top face of the scene's bounds.
-RaySets makeRays(const SceneGeometry& g, const Accel& oracle, const std::optional<CameraDesc>& camDesc, int resolution,
+RaySets makeRays(const SceneGeometry& g, const Accel& oracle, const std::optional<CameraDesc>& camera, int resolution,
                  uint64_t seed) {
-    RaySets sets;
-    Bounds3f b = g.bounds();
-    if (b.empty()) b.lower = Vec3f(-1.f), b.upper = Vec3f(1.f);
-    Camera cam(camDesc ? *camDesc : framingCamera(b), resolution, resolution);
-    for (int y = 0; y < resolution; ++y)
-        for (int x = 0; x < resolution; ++x) sets.primary.push_back(cam.generateRay(Vec2f(x + 0.5f, y + 0.5f), Vec2f(0.5f)));
-    Pcg32 rng(seed, 0);
-    for (const Ray& r : sets.primary) {
-        Hit h;
-        if (!oracle.intersect(r, h)) continue;
-        Vec3f p;
-        if (h.geomId < g.meshes.size()) {
-            const TriangleMesh& m = g.meshes[h.geomId];
-            const glm::uvec3& t = m.triangles[h.primId];
-            p = (1.f - h.u - h.v) * m.positions[t.x] + h.u * m.positions[t.y] + h.v * m.positions[t.z];
-        } else {
-            p = r.o + h.t * r.d;
-        }
-        Vec3f n = glm::dot(h.ng, r.d) < 0.f ? h.ng : -h.ng;
-        sets.diffuse.push_back(spawnRay(p, n, Frame(n).toWorld(sampleCosineHemisphere(rng.next2D()))));
-        Vec3f target(b.lower.x + rng.nextFloat() * (b.upper.x - b.lower.x), b.upper.y,
-                     b.lower.z + rng.nextFloat() * (b.upper.z - b.lower.z));
-        sets.shadow.push_back(spawnShadowRay(p, n, target, Vec3f(0.f)));
-    }
-    for (size_t i = sets.diffuse.size(); i > 1; --i) std::swap(sets.diffuse[i - 1], sets.diffuse[rng.nextU32() % i]);
-    return sets;
+    size_t count = size_t(resolution) * size_t(resolution);
+    return {generateRays(g, oracle, RayKind::Primary, count, seed, camera),
+            generateRays(g, oracle, RayKind::Diffuse, count, seed, camera),
+            generateRays(g, oracle, RayKind::Shadow, count, seed, camera)};
 }
 
 /// The query a ray set is traced with: closest hit (primary rays through intersectCoherent, as
@@ -176,17 +150,98 @@ int runComplexity(const std::vector<std::string>& inputs, const std::vector<std:
     return 0;
 }
 
+struct BenchOptions {
+    std::vector<std::string> inputs;
+    std::string accels = "bvh,embree", rays = "primary,diffuse,shadow";
+    int threads = 1, repeat = 5, resolution = 1024;
+    uint64_t seed = 1;
+    bool json = false, complexity = false;
+};
+
+/// One structure's measurements on one input: every repeat's build time and rays/s per ray kind.
+struct Measured {
+    std::vector<double> buildSeconds;
+    std::map<std::string, std::vector<double>> mrays;
+    AccelStats stats;
+    nlohmann::json kdStats;
+};
+
+/// The JSON entry of one structure, with its text line printed unless `json`; `embree` points to
+/// Embree's measurements when they were taken too (for the ratios).
+nlohmann::json structureReport(const std::string& name, const std::vector<std::string>& kinds, const Measured& m,
+                               const Measured* embree, size_t primitives, bool json) {
+    nlohmann::json s = {{"buildSeconds", median(m.buildSeconds)},
+                        {"bytesPerPrimitive", primitives ? double(m.stats.memoryBytes) / double(primitives) : 0.0}};
+    std::ostringstream line;
+    line << std::fixed << std::setprecision(3) << "  " << std::setw(8) << std::left << name << " build "
+         << median(m.buildSeconds) << " s";
+    if (embree) line << " (" << median(m.buildSeconds) / median(embree->buildSeconds) << "x embree)";
+    line << std::setprecision(1) << ", " << s["bytesPerPrimitive"].get<double>() << " B/prim";
+    for (const std::string& kind : kinds) {
+        double mr = median(m.mrays.at(kind));
+        s["mraysPerSecond"][kind] = mr;
+        line << std::setprecision(2) << ", " << kind << " " << mr << " Mrays/s";
+        if (embree) {
+            double ratio = mr / median(embree->mrays.at(kind));
+            s["ratioToEmbree"][kind] = ratio;
+            line << " (" << ratio << "x)";
+        }
+    }
+    if (!m.kdStats.empty()) {
+        s["kdStats"] = m.kdStats;
+        line << "\n           " << m.kdStats.dump();
+    }
+    if (!json) std::cout << line.str() << "\n";
+    return s;
+}
+
+/// Builds and traces every structure on one input, `repeat` times interleaved; prints a line per
+/// structure (unless --json) and returns the input's JSON entry.
+nlohmann::json benchInput(const std::string& input, const std::vector<std::string>& accels,
+                          const std::vector<std::string>& kinds, const AccelOptions& options, const BenchOptions& opt) {
+    std::vector<std::string> warnings;
+    std::optional<CameraDesc> camera;
+    SceneGeometry g = loadGeometryFile(input, camera, warnings);
+    RaySets rays;
+    {
+        auto oracle = createAccel("embree", g, options);
+        rays = makeRays(g, *oracle, camera, opt.resolution, opt.seed);
+    }
+    std::map<std::string, Measured> measured;
+    size_t checksum = 0;
+    for (int rep = 0; rep < opt.repeat; ++rep) {
+        for (const std::string& name : accels) {  // interleaved: each repeat runs every structure
+            auto accel = createAccel(name, g, options);
+            Measured& m = measured[name];
+            m.stats = accel->stats();
+            m.kdStats = kdStatsJson(*accel);
+            m.buildSeconds.push_back(accel->stats().buildSeconds);
+            for (const std::string& kind : kinds) {
+                const std::vector<Ray>& set = rays.get(kind);
+                Query query = kind == "shadow" ? Query::Any : kind == "primary" ? Query::ClosestCoherent : Query::Closest;
+                double s = traceSeconds(*accel, set, query, opt.threads, checksum);
+                m.mrays[kind].push_back(double(set.size()) / s * 1e-6);
+            }
+        }
+    }
+    nlohmann::json entry = {{"input", input}, {"primitives", g.primitiveCount()},
+                            {"rays", {{"primary", rays.primary.size()}, {"diffuse", rays.diffuse.size()}, {"shadow", rays.shadow.size()}}},
+                            {"structures", nlohmann::json::object()}};
+    if (!opt.json)
+        std::cout << input << ": " << g.primitiveCount() << " primitives; rays primary " << rays.primary.size()
+                  << ", diffuse " << rays.diffuse.size() << ", shadow " << rays.shadow.size() << "\n";
+    const Measured* embree = measured.count("embree") ? &measured.at("embree") : nullptr;
+    for (const std::string& name : accels)
+        entry["structures"][name] = structureReport(name, kinds, measured.at(name), embree, g.primitiveCount(), opt.json);
+    entry["checksum"] = checksum;
+    for (const std::string& w : warnings) printWarning(w);
+    return entry;
+}
+
 }  // namespace
 
 Runner addBenchAccelCommand(CLI::App& app) {
-    struct Options {
-        std::vector<std::string> inputs;
-        std::string accels = "bvh,embree", rays = "primary,diffuse,shadow";
-        int threads = 1, repeat = 5, resolution = 1024;
-        uint64_t seed = 1;
-        bool json = false, complexity = false;
-    };
-    auto opt = std::make_shared<Options>();
+    auto opt = std::make_shared<BenchOptions>();
     CLI::App* cmd = app.add_subcommand("bench-accel", "Build time, memory and rays/s of acceleration structures on identical rays");
     cmd->add_option("INPUT", opt->inputs, "glTF scenes, PLY (.ply.gz) or OBJ meshes")->required();
     cmd->add_option("--accel", opt->accels, "comma-separated structures")->capture_default_str();
@@ -194,7 +249,7 @@ Runner addBenchAccelCommand(CLI::App& app) {
     cmd->add_option("--rays", opt->rays, "ray kinds: primary, diffuse, shadow")->capture_default_str();
     cmd->add_option("--repeat", opt->repeat, "interleaved repeats (the median is reported)")->capture_default_str();
     cmd->add_option("--resolution", opt->resolution, "primary rays: a square image of this many pixels a side")->capture_default_str();
-    cmd->add_option("--seed", opt->seed, "seed of the diffuse and shadow rays")->capture_default_str();
+    cmd->add_option("--seed", opt->seed, "seed of the ray sets")->capture_default_str();
     cmd->add_flag("--json", opt->json, "print one JSON object instead of text");
     cmd->add_flag("--complexity", opt->complexity, "build times only, with build time / (N log2 N) per input");
     return [opt] {
@@ -210,70 +265,8 @@ Runner addBenchAccelCommand(CLI::App& app) {
         if (!opt->json) std::cout << "config: threads " << opt->threads << ", repeat " << opt->repeat << ", bvh "
                                   << configJson(BvhConfig{}).dump() << ", kdtree "
                                   << kdConfigJson(KdConfig{}).dump() << "\n";
-        for (const std::string& input : opt->inputs) {
-            std::vector<std::string> warnings;
-            std::optional<CameraDesc> camera;
-            SceneGeometry g = loadGeometryFile(input, camera, warnings);
-            RaySets rays;
-            {
-                auto oracle = createAccel("embree", g, options);
-                rays = makeRays(g, *oracle, camera, opt->resolution, opt->seed);
-            }
-            std::map<std::string, std::vector<double>> buildSeconds;
-            std::map<std::string, std::map<std::string, std::vector<double>>> mrays;
-            std::map<std::string, AccelStats> stats;
-            std::map<std::string, nlohmann::json> kdStats;
-            size_t checksum = 0;
-            for (int rep = 0; rep < opt->repeat; ++rep) {
-                for (const std::string& name : accels) {  // interleaved: each repeat runs every structure
-                    auto accel = createAccel(name, g, options);
-                    stats[name] = accel->stats();
-                    kdStats[name] = kdStatsJson(*accel);
-                    buildSeconds[name].push_back(accel->stats().buildSeconds);
-                    for (const std::string& kind : kinds) {
-                        const std::vector<Ray>& set = rays.get(kind);
-                        Query query = kind == "shadow" ? Query::Any : kind == "primary" ? Query::ClosestCoherent : Query::Closest;
-                        double s = traceSeconds(*accel, set, query, opt->threads, checksum);
-                        mrays[name][kind].push_back(double(set.size()) / s * 1e-6);
-                    }
-                }
-            }
-            nlohmann::json entry = {{"input", input}, {"primitives", g.primitiveCount()},
-                                    {"rays", {{"primary", rays.primary.size()}, {"diffuse", rays.diffuse.size()}, {"shadow", rays.shadow.size()}}},
-                                    {"structures", nlohmann::json::object()}};
-            if (!opt->json)
-                std::cout << input << ": " << g.primitiveCount() << " primitives; rays primary " << rays.primary.size()
-                          << ", diffuse " << rays.diffuse.size() << ", shadow " << rays.shadow.size() << "\n";
-            bool haveEmbree = mrays.count("embree") > 0;
-            for (const std::string& name : accels) {
-                nlohmann::json s = {{"buildSeconds", median(buildSeconds[name])},
-                                    {"bytesPerPrimitive", g.primitiveCount() ? double(stats[name].memoryBytes) / double(g.primitiveCount()) : 0.0}};
-                std::ostringstream line;
-                line << std::fixed << std::setprecision(3) << "  " << std::setw(8) << std::left << name << " build "
-                     << median(buildSeconds[name]) << " s";
-                if (haveEmbree) line << " (" << median(buildSeconds[name]) / median(buildSeconds["embree"]) << "x embree)";
-                line << std::setprecision(1) << ", " << s["bytesPerPrimitive"].get<double>() << " B/prim";
-                for (const std::string& kind : kinds) {
-                    double m = median(mrays[name][kind]);
-                    s["mraysPerSecond"][kind] = m;
-                    line << std::setprecision(2) << ", " << kind << " " << m << " Mrays/s";
-                    if (haveEmbree) {
-                        double ratio = m / median(mrays["embree"][kind]);
-                        s["ratioToEmbree"][kind] = ratio;
-                        line << " (" << ratio << "x)";
-                    }
-                }
-                if (!kdStats[name].empty()) {
-                    s["kdStats"] = kdStats[name];
-                    line << "\n           " << kdStats[name].dump();
-                }
-                entry["structures"][name] = s;
-                if (!opt->json) std::cout << line.str() << "\n";
-            }
-            entry["checksum"] = checksum;
-            report["inputs"].push_back(entry);
-            for (const std::string& w : warnings) printWarning(w);
-        }
+        for (const std::string& input : opt->inputs)
+            report["inputs"].push_back(benchInput(input, accels, kinds, options, *opt));
         if (opt->json) std::cout << report.dump(2) << std::endl;
         return 0;
     };

@@ -6,7 +6,7 @@
 #include <chrono>
 #include <iostream>
 
-#include "accel/validate.h"
+#include "validation/validate.h"
 #include "app/commands.h"
 #include "scene/mesh_loader.h"
 
@@ -35,7 +35,7 @@ Runner addValidateAccelCommand(CLI::App& app) {
         std::optional<CameraDesc> camera;
         SceneGeometry geometry = loadGeometryFile(opt->input, camera, warnings);
         std::vector<RayKind> kinds;
-        if (opt->kind == "all") kinds.assign(std::begin(kAllRayKinds), std::end(kAllRayKinds));
+        if (opt->kind == "all") kinds.assign(std::begin(kValidationRayKinds), std::end(kValidationRayKinds));
         else kinds.push_back(parseRayKind(opt->kind));
 
         auto test = createAccel(opt->accel, geometry);

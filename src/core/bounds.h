@@ -20,9 +20,19 @@ struct Bounds3f {
     }
     Vec3f diagonal() const { return empty() ? Vec3f(0.f) : upper - lower; }
     Vec3f center() const { return 0.5f * (lower + upper); }
-    float surfaceArea() const {
+    /// Half the surface area, 0 for an empty box: the SAH compares ratios of areas, so builders
+    /// need no factor 2.
+    float halfArea() const {
         Vec3f d = diagonal();
-        return 2.f * (d.x * d.y + d.y * d.z + d.z * d.x);
+        return d.x * d.y + d.y * d.z + d.z * d.x;
+    }
+    float surfaceArea() const { return 2.f * halfArea(); }
+    /// The common part of two boxes (empty when they do not meet).
+    Bounds3f intersection(const Bounds3f& other) const {
+        Bounds3f r;
+        r.lower = glm::max(lower, other.lower);
+        r.upper = glm::min(upper, other.upper);
+        return r;
     }
 };
 

@@ -1,7 +1,7 @@
 #pragma once
 /// \file intersect.h
 /// Reference ray–primitive tests shared by the brute-force backend, the Embree sphere callback and
-/// (later) our own BVH and k-d tree.
+/// the mixed (sphere-holding) leaves of our BVH and k-d tree.
 #include "core/math.h"
 #include "core/ray.h"
 

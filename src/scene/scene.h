@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "accel/accel.h"
+#include "geometry/hit.h"
 #include "geometry/shapes.h"
 #include "materials/material.h"
 #include "scene/camera.h"

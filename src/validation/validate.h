@@ -6,34 +6,14 @@
 /// grazing an edge or a sphere's silhouette — confirmed in double precision) or an *error*.
 #include <nlohmann/json.hpp>
 
-#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "accel/accel.h"
-#include "scene/camera.h"
+#include "validation/ray_sets.h"
 
 namespace tessera {
-
-enum class RayKind {
-    Primary,  ///< a pinhole camera through jittered pixels (the scene's camera or one framing the bounds)
-    Random,   ///< origins around the bounds, uniform or aimed directions, some axis-aligned with ±0.0, some tMin > 0
-    Diffuse,  ///< cosine-distributed bounces from the reference's primary hits (offset origins)
-    Grazing,  ///< aimed at triangle edges and vertices and at sphere silhouettes, often nearly tangent
-};
-std::string_view toString(RayKind kind);
-/// Parses "primary", "random", "diffuse", "grazing"; throws InputError otherwise.
-RayKind parseRayKind(std::string_view name);
-inline constexpr RayKind kAllRayKinds[] = {RayKind::Primary, RayKind::Random, RayKind::Diffuse, RayKind::Grazing};
-
-/// `count` rays of one kind, reproducible from `seed`. Diffuse rays need the reference structure
-/// (to find the surfaces they bounce from); `camera` is used by primary and diffuse rays when given.
-std::vector<Ray> generateRays(const SceneGeometry& geometry, const Accel& reference, RayKind kind, size_t count,
-                              uint64_t seed, const std::optional<CameraDesc>& camera = std::nullopt);
-
-/// A camera looking at the centre of `bounds` from a fixed oblique direction, framing all of it.
-CameraDesc framingCamera(const Bounds3f& bounds);
 
 struct ValidationTolerances {
     float tRelative = 1e-5f;  ///< |Δt| ≤ tRelative·t (plus a few ulps of the origin's magnitude)

@@ -1,9 +1,10 @@
 #pragma once
-/// \file bvh_simd.h
-/// The few SIMD operations the BVH traversal needs, written with GCC/Clang vector extensions so
-/// the same code compiles to SSE2 in the default build and to AVX2 inside functions marked
-/// `__attribute__((target("avx2")))` (the traversal is instantiated once per instruction set and
-/// chosen at run time, so the default build never needs -march=native).
+/// \file accel_simd.h
+/// The few SIMD operations the BVH and k-d tree traversals (and the BVH builder's binning) need,
+/// written with GCC/Clang vector extensions so the same code compiles to SSE2 in the default build
+/// and to AVX2 inside functions marked `__attribute__((target("avx2")))` (each traversal is
+/// instantiated once per instruction set and chosen at run time, kernel_isa.h, so the default build
+/// never needs -march=native).
 #include <array>
 #include <cstdint>
 #include <cstring>
