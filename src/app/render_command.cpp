@@ -14,6 +14,7 @@
 #include "accel/accel.h"
 #include "app/commands.h"
 #include "core/error.h"
+#include "core/fnv1a.h"
 #include "core/version.h"
 #include "integrators/bdpt.h"
 #include "integrators/integrator.h"
@@ -41,22 +42,6 @@ struct RenderArgs {
     bool resume = false;
     uint64_t stopAfterTiles = 0;      ///< test hook (hidden option)
 };
-
-/// FNV-1a 64 of the scene file: identifies the exact input in the output's metadata.
-std::string hashFile(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    uint64_t h = 0xcbf29ce484222325ULL;
-    char buf[1 << 16];
-    while (in.read(buf, sizeof buf) || in.gcount() > 0) {
-        for (std::streamsize i = 0; i < in.gcount(); ++i) {
-            h ^= uint8_t(buf[i]);
-            h *= 0x100000001b3ULL;
-        }
-    }
-    char out[32];
-    std::snprintf(out, sizeof out, "fnv1a64:%016llx", static_cast<unsigned long long>(h));
-    return out;
-}
 
 std::vector<float> parseNumbers(const std::string& text, const std::string& option) {
     std::vector<float> v;
@@ -141,7 +126,7 @@ CheckpointHeader checkpointHeader(const RenderArgs& a, const RenderSettings& s, 
     camera += exact(cam.yfov) + "," + exact(cam.apertureRadius) + "," + exact(cam.focusDistance);
     return {
         {"renderer", std::string("tessera ") + versionString() + " (" + gitRevision() + ")"},
-        {"scene_hash", hashFile(a.scene)},
+        {"scene_hash", fnv1a64OfFile(a.scene)},
         {"integrator", std::string(integrator.name())},
         {"seed", std::to_string(s.seed)},
         {"resolution", std::to_string(s.width) + "x" + std::to_string(s.height)},
@@ -290,7 +275,7 @@ int runRender(const RenderArgs& a) {
         {"tessera:version", versionString()},
         {"tessera:git", gitRevision()},
         {"tessera:scene", a.scene},
-        {"tessera:scene_hash", hashFile(a.scene)},
+        {"tessera:scene_hash", fnv1a64OfFile(a.scene)},
         {"tessera:integrator", std::string(integrator->name())},
         {"tessera:accel", std::string(accel->name())},
         {"tessera:spp", std::to_string(stats.sppCompleted)},

@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <memory>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
-#include "render/interrupt.h"
 
 namespace tessera {
 namespace {
@@ -133,25 +133,7 @@ static_assert(sizeof(SplatSink::Entry) == 16, "checkpoint splat entries are 4-by
 
 void writeCheckpoint(const std::string& path, const CheckpointHeader& header, const Film& film,
                      const RenderState& state) {
-    const fs::path parent = fs::path(path).parent_path();
-    if (!parent.empty()) {
-        std::error_code ec;
-        fs::create_directories(parent, ec);
-        if (ec) throw InputError(path + ": cannot create directory " + parent.string() + ": " + ec.message());
-    }
-    const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-    // A second Ctrl-C exits at once from the signal handler: let it remove the temporary file.
-    TemporaryFileForSignal signalCleanup(tmp);
-    struct Remove {
-        const std::string* p;
-        ~Remove() {
-            if (p) {
-                std::error_code ignored;
-                fs::remove(*p, ignored);
-            }
-        }
-    } remove{&tmp};
-    {
+    writeFileAtomically(path, "checkpoint", [&](const std::string& tmp) {
         File f(std::fopen(tmp.c_str(), "wb"));
         if (!f) throw InputError(path + ": cannot write checkpoint: " + std::strerror(errno));
         Writer w(f.get(), path);
@@ -193,11 +175,7 @@ void writeCheckpoint(const std::string& path, const CheckpointHeader& header, co
             throw InputError(path + ": cannot write checkpoint: " + std::strerror(errno));
         FILE* raw = f.release();
         if (std::fclose(raw) != 0) throw InputError(path + ": cannot finish writing checkpoint: " + std::strerror(errno));
-    }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) throw InputError(path + ": cannot replace checkpoint: " + ec.message());
-    remove.p = nullptr;
+    });
 }
 
 RenderState readCheckpoint(const std::string& path, const CheckpointHeader& expected, Film& film) {
