@@ -1,11 +1,75 @@
-#include "integrators/path_tracer.h"
+#include "integrators/ptnee.h"
 
-#include "core/frame.h"
 #include "core/sampling.h"
+#include "integrators/next_event.h"
+#include "integrators/russian_roulette.h"
 #include "integrators/sample_trace.h"
-#include "materials/bsdf.h"
+#include "materials/surface_bsdf.h"
 
 namespace tessera {
+
+namespace {
+
+/// Emission found by BSDF sampling at `si`, weighted against the light-sampling strategy that could
+/// have produced the same path (`prevPdfW`: the BSDF density that produced the ray from `prevP`).
+/// Emission reached through a delta bounce or seen directly from the camera has weight 1.
+void addEmission(const RenderContext& ctx, const SurfaceInteraction& si, const Vec3f& wo, const Rgb& beta, bool deltaBounce,
+                 float prevPdfW, const Vec3f& prevP, Rgb& L) {
+    const LightSet& lights = ctx.scene.lights();
+    Rgb Le = lights.emitted(si.lightIndex, si.ng, wo);
+    if (isBlack(Le)) return;
+    SampleTrace* trace = ctx.trace;
+    if (deltaBounce) {
+        L += beta * Le;
+        if (trace) [[unlikely]] {
+            trace->add("Le", Le);
+            trace->add("emissionMisW", 1.f);
+            trace->add("emissionContribution", beta * Le);
+        }
+        return;
+    }
+    float pdfLightW = lights.pdfW(si.lightIndex, prevP, si.p, si.ng);
+    L += beta * Le * powerHeuristic(prevPdfW, pdfLightW);
+    if (trace) [[unlikely]] {
+        trace->add("Le", Le);
+        trace->add("emissionPdfLightW", pdfLightW);
+        trace->add("emissionMisW", powerHeuristic(prevPdfW, pdfLightW));
+        trace->add("emissionContribution", beta * Le * powerHeuristic(prevPdfW, pdfLightW));
+    }
+}
+
+/// Next-event estimation at a non-delta vertex: one light sample (integrators/next_event.h),
+/// weighted against BSDF sampling, added to L.
+void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, const SurfaceBsdf& bsdf, const Vec3f& wo,
+                    const Rgb& beta, Sampler& sampler, Rgb& L) {
+    NextEventSample ne;
+    if (!sampleNextEvent(ctx.scene.lights(), si.p, si.ng, wo, sampler, ne)) return;
+    const LightSample& ls = ne.light;
+    Vec3f toLight = ls.p - ne.pRef;
+    float dist = glm::length(toLight);
+    Vec3f wi = toLight / dist;
+    SampleTrace* trace = ctx.trace;
+    if (trace) [[unlikely]] {
+        // Recomputing the BSDF density draws no random numbers: the path is unchanged.
+        trace->add("lightP", ls.p);
+        trace->add("lightPdfW", ls.pdfW);
+        if (!ls.isDelta) trace->add("lightBsdfPdfW", bsdf.pdfFwdW(wo, wi));
+    }
+    // Reflection-only BSDFs: wi must leave on wo's side of the *geometric* surface, or a shading
+    // normal would let light through (Veach 1997, §5.3).
+    if (!(dist > 0.f && glm::dot(wi, si.ng) * glm::dot(wo, si.ng) > 0.f)) return;
+    Rgb f = bsdf.eval(wo, wi, TransportMode::Radiance) * std::abs(glm::dot(wi, bsdf.ns()));
+    if (isBlack(f) || !lightVisible(ctx.accel, si.p, si.ng, ls)) return;
+    // A point light cannot be hit by BSDF sampling: light sampling is its only strategy.
+    float w = ls.isDelta ? 1.f : powerHeuristic(ls.pdfW, bsdf.pdfFwdW(wo, wi));
+    L += beta * f * ls.Le * (w / ls.pdfW);
+    if (trace) [[unlikely]] {
+        trace->add("lightMisW", w);
+        trace->add("lightContribution", beta * f * ls.Le * (w / ls.pdfW));
+    }
+}
+
+}  // namespace
 
 // Why this estimator is unbiased (writeup.md, "Why PT + NEE + MIS is unbiased"):
 //  * Each path vertex contributes emission through two strategies: a light sample (NEE) and a BSDF
@@ -15,12 +79,9 @@ namespace tessera {
 //    (mirror, glass) or seen directly from the camera can only come from BSDF sampling: weight 1.
 //  * Throughput β is the product of f·|cos|/pdf of the sampled directions: the standard
 //    Monte Carlo estimator of the path-integral terms (Veach 1997 eq. 8.19).
-//  * Russian roulette continues with probability p = min(1, max β) and divides β by p, so the
-//    expected contribution is unchanged (Arvo & Kirk 1990); since p > 0 whenever β ≠ 0, no path with
-//    non-zero contribution has zero probability.
-Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& sampler, SplatSink&) const {
+//  * Russian roulette divides β by the survival probability (integrators/russian_roulette.h).
+Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& sampler, SplatSink&) const {
     const Scene& scene = ctx.scene;
-    const LightSet& lights = scene.lights();
     Ray ray = ctx.camera.generateRay(raster, sampler.get2D());
 
     Rgb L(0.f), beta(1.f);
@@ -39,105 +100,31 @@ Rgb PathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& s
         if (trace) [[unlikely]] {
             trace->vertex(depth, si.p, si.ng, si.materialId, beta);
         }
-
-        // Emission found by BSDF sampling, weighted against the light-sampling strategy.
-        if (si.lightIndex != kInvalidId) {
-            Rgb Le = lights.emitted(si.lightIndex, si.ng, wo);
-            if (!isBlack(Le)) {
-                if (deltaBounce) {
-                    L += beta * Le;
-                    if (trace) [[unlikely]] {
-                        trace->add("Le", Le);
-                        trace->add("emissionMisW", 1.f);
-                        trace->add("emissionContribution", beta * Le);
-                    }
-                } else {
-                    float pdfLightW = lights.pdfW(si.lightIndex, prevP, si.p, si.ng);
-                    L += beta * Le * powerHeuristic(prevPdfW, pdfLightW);
-                    if (trace) [[unlikely]] {
-                        trace->add("Le", Le);
-                        trace->add("emissionPdfLightW", pdfLightW);
-                        trace->add("emissionMisW", powerHeuristic(prevPdfW, pdfLightW));
-                        trace->add("emissionContribution", beta * Le * powerHeuristic(prevPdfW, pdfLightW));
-                    }
-                }
-            }
-        }
+        if (si.lightIndex != kInvalidId) addEmission(ctx, si, wo, beta, deltaBounce, prevPdfW, prevP, L);
         if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;
 
-        const Material& mat = scene.materials[si.materialId];
-        Frame frame(si.ns);
-        Vec3f woL = frame.toLocal(wo);
-        float woNg = glm::dot(wo, si.ng);
-        // Light sampling and MIS densities are evaluated from the point offset off the surface on
-        // wo's side (where reflected rays start), not from the surface point itself: for a point on
-        // an emitting sphere, "inside or outside the sphere" must not be decided by rounding.
-        Vec3f pRef = offsetRayOrigin(si.p, woNg >= 0.f ? si.ng : -si.ng);
-
-        // Next-event estimation: one light sample, weighted against BSDF sampling.
-        if (!isDeltaMaterial(mat) && !lights.empty()) {
-            LightSample ls;
-            float uPick = sampler.get1D();
-            Vec2f uLight = sampler.get2D();
-            if (lights.sample(pRef, uPick, uLight, ls) && !isBlack(ls.Le)) {
-                Vec3f toLight = ls.p - pRef;
-                float dist = glm::length(toLight);
-                Vec3f wi = toLight / dist;
-                Vec3f wiL = frame.toLocal(wi);
-                if (trace) [[unlikely]] {
-                    // Recomputing the BSDF density draws no random numbers: the path is unchanged.
-                    trace->add("lightP", ls.p);
-                    trace->add("lightPdfW", ls.pdfW);
-                    if (!ls.isDelta) trace->add("lightBsdfPdfW", pdfBsdfW(mat, woL, wiL));
-                }
-                // Reflection-only BSDFs: wi must leave on wo's side of the *geometric* surface, or a
-                // shading normal would let light through (Veach 1997, §5.3).
-                if (dist > 0.f && glm::dot(wi, si.ng) * woNg > 0.f) {
-                    Rgb f = evalBsdf(mat, woL, wiL, TransportMode::Radiance) * std::abs(wiL.z);
-                    if (!isBlack(f) && !ctx.accel.occluded(spawnShadowRay(si.p, si.ng, ls.p, ls.n))) {
-                        // A point light cannot be hit by BSDF sampling: light sampling is its only strategy.
-                        float w = ls.isDelta ? 1.f : powerHeuristic(ls.pdfW, pdfBsdfW(mat, woL, wiL));
-                        L += beta * f * ls.Le * (w / ls.pdfW);
-                        if (trace) [[unlikely]] {
-                            trace->add("lightMisW", w);
-                            trace->add("lightContribution", beta * f * ls.Le * (w / ls.pdfW));
-                        }
-                    }
-                }
-            }
-        }
+        SurfaceBsdf bsdf(scene.materials[si.materialId], si.ns, si.ng);
+        if (!bsdf.isDelta()) addLightSample(ctx, si, bsdf, wo, beta, sampler, L);
 
         // Continue the path by BSDF sampling.
-        BsdfSample bs;
+        SurfaceBsdfSample bs;
         float uLobe = sampler.get1D();
         Vec2f uDir = sampler.get2D();
-        if (!sampleBsdf(mat, woL, uLobe, uDir, TransportMode::Radiance, bs)) {
+        if (!bsdf.sample(wo, uLobe, uDir, TransportMode::Radiance, bs)) {
             if (trace) [[unlikely]] trace->add("L", L);
             break;
         }
-        Vec3f wi = frame.toWorld(bs.wiLocal);
         if (trace) [[unlikely]] {
-            trace->bsdfSample(wi, bs.pdfW, bs.isDelta, bs.weight);
+            trace->bsdfSample(bs.wiWorld, bs.pdfFwdW, bs.isDelta, bs.weight);
             trace->add("L", L);
         }
-        bool reflected = bs.wiLocal.z * woL.z > 0.f;
-        if (reflected != (glm::dot(wi, si.ng) * woNg > 0.f)) break;  // shading/geometric side mismatch
         beta *= bs.weight;
         etaScale *= bs.eta * bs.eta;
         deltaBounce = bs.isDelta;
-        prevPdfW = bs.pdfW;
+        prevPdfW = bs.pdfFwdW;
         if (isBlack(beta)) break;
-
-        // Russian roulette (Arvo & Kirk 1990) after two bounces; etaScale keeps paths inside glass
-        // from being killed for a radiance scaling that reverses when they leave (pbrt-v4 §14.1.5).
-        float rr = maxComponent(beta) * etaScale;
-        if (depth >= 2 && rr < 1.f) {
-            float q = std::max(0.f, 1.f - rr);
-            if (trace) [[unlikely]] trace->add("rrSurvival", 1.f - q);
-            if (sampler.get1D() < q) break;
-            beta /= 1.f - q;
-        }
-        ray = spawnRay(si.p, si.ng, wi);
+        if (depth >= kRouletteMinDepth && !survivesThroughputRoulette(maxComponent(beta) * etaScale, beta, sampler, trace)) break;
+        ray = spawnRay(si.p, si.ng, bs.wiWorld);
         prevP = ray.o;
     }
     return L;
