@@ -27,13 +27,9 @@ Scene loadScene(const std::string& relative) {
 
 Film renderFilm(const Scene& scene, const Integrator& integrator, int w, int h, int spp, uint64_t seed) {
     auto accel = createAccel("embree", scene.geometry);
-    Camera camera(*scene.camera, w, h);
-    RenderContext ctx{scene, *accel, camera, /* maxDepth = */ -1};
-    Film film(w, h);
-    RenderOptions opt{.spp = spp, .seed = seed};
-    RenderStats stats = renderImage(ctx, integrator, film, opt);
-    EXPECT_EQ(stats.nonFiniteDropped, 0u) << integrator.name();
-    return film;
+    test::TestRender r = test::renderScene(scene, *accel, integrator, w, h, RenderOptions{.spp = spp, .seed = seed});
+    EXPECT_EQ(r.stats.nonFiniteDropped, 0u) << integrator.name();
+    return std::move(r.film);
 }
 
 /// Per-pixel luminance (Rec. 709) of a render with the named integrator.
