@@ -23,7 +23,7 @@
 #include "core/frame.h"
 #include "core/rng.h"
 #include "core/sampling.h"
-#include "scene/mesh_loader.h"
+#include "scene/scene_loader.h"
 
 namespace tessera::app {
 namespace {
