@@ -2,7 +2,7 @@
 // pinned as seeded numeric tests on the failure-mode scenes. Each test states what the study found
 // and asserts it with a tolerance; every region is chosen from renders with one set of seeds and
 // measured with renders of other seeds, so the selection's noise cannot leak into the measurement.
-// Resolutions and sample counts are small: the whole file takes a few seconds on 2 cores.
+// Resolutions and sample counts are small, so the file runs in seconds.
 #include <gtest/gtest.h>
 
 #include <cmath>

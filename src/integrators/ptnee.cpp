@@ -71,7 +71,7 @@ void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, cons
 
 }  // namespace
 
-// Why this estimator is unbiased (writeup.md, "Why PT + NEE + MIS is unbiased"):
+// Why this estimator is unbiased (writeup, "Light transport and why each estimator is unbiased"):
 //  * Each path vertex contributes emission through two strategies: a light sample (NEE) and a BSDF
 //    sample that happens to hit the emitter. Their MIS weights (power heuristic, Veach 1997 eq. 9.13)
 //    sum to 1 for every light path both can produce, so the combination is unbiased (Veach eq. 9.9
