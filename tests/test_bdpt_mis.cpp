@@ -15,6 +15,78 @@ void expectRelNear(double a, double b, double rel, const std::string& what) {
     EXPECT_LE(std::abs(a - b), rel * std::max(std::abs(a), std::abs(b)) + 1e-30) << what << ": " << a << " vs " << b;
 }
 
+/// What a random walk stored equals the densities recomputed from its vertices.
+void expectStoredDensitiesMatch(const RenderContext& ctx, const std::vector<PathVertex>& sub, const std::string& what) {
+    for (size_t j = 1; j < sub.size(); ++j) {
+        float fwd = pdfNextA(ctx, j >= 2 ? &sub[j - 2] : nullptr, sub[j - 1], sub[j]);
+        expectRelNear(sub[j].pdfFwdA, fwd, 1e-3, what + " pdfFwdA");
+        if (j + 2 < sub.size()) expectRelNear(sub[j].pdfRevA, pdfNextA(ctx, &sub[j + 2], sub[j + 1], sub[j]), 1e-3, what + " pdfRevA");
+    }
+}
+
+/// The full path x0 … xk of strategy split s as the walks would have produced it: the light
+/// sub-path x0 … x(s−1) (`ys`) and the camera sub-path xk … xs (`zs`), with the densities pL (from
+/// the light side) and pE (from the camera side) of every vertex.
+void splitPath(const std::vector<PathVertex>& x, const std::vector<double>& pL, const std::vector<double>& pE, int s,
+               uint32_t lightMaterial, std::vector<PathVertex>& ys, std::vector<PathVertex>& zs) {
+    const int k = int(x.size()) - 1;
+    ys.assign(x.begin(), x.begin() + s);
+    zs.clear();
+    for (int i = 0; i < s; ++i) ys[size_t(i)].pdfFwdA = float(pL[size_t(i)]), ys[size_t(i)].pdfRevA = float(pE[size_t(i)]);
+    for (int i = k; i >= s; --i) {
+        PathVertex v = x[size_t(i)];
+        v.pdfFwdA = float(pE[size_t(i)]);
+        v.pdfRevA = float(pL[size_t(i)]);
+        zs.push_back(v);
+    }
+    if (s == 0) {
+        // The camera sub-path's end lies on the light as an ordinary surface hit.
+        PathVertex& e = zs.back();
+        e.type = VertexType::Surface;
+        e.materialId = lightMaterial;
+        e.ns = e.ng;
+        e.woWorld = glm::normalize(x[1].p - x[0].p);
+    }
+}
+
+/// For the full path x0 … xk (x0 on a light, xk the lens): the weight of every strategy equals the
+/// brute-force p_s^β / Σ p_i^β, and the weights sum to one. False (nothing checked) when some
+/// density along the path is zero.
+bool checkWeightsOfPath(const RenderContext& ctx, const std::vector<PathVertex>& x, uint32_t lightMaterial) {
+    const int k = int(x.size()) - 1;
+    // p→(x_i): density from the light side; p←(x_i): from the camera side (x_k is the lens).
+    std::vector<double> pL(size_t(k + 1), 0.0), pE(size_t(k + 1), 0.0);
+    pL[0] = pdfLightOriginA(ctx, x[0]);
+    for (int i = 1; i <= k - 1; ++i) pL[size_t(i)] = pdfNextA(ctx, i >= 2 ? &x[size_t(i - 2)] : nullptr, x[size_t(i - 1)], x[size_t(i)]);
+    for (int i = k - 1; i >= 0; --i) pE[size_t(i)] = pdfNextA(ctx, i + 2 <= k ? &x[size_t(i + 2)] : nullptr, x[size_t(i + 1)], x[size_t(i)]);
+    for (int i = 0; i < k; ++i)
+        if (!(pL[size_t(i)] > 0.0 && pE[size_t(i)] > 0.0)) return false;  // e.g. x1 behind the one-sided light
+
+    for (MisHeuristic h : {MisHeuristic::Power, MisHeuristic::Balance}) {
+        double beta = h == MisHeuristic::Power ? 2.0 : 1.0;
+        std::vector<double> ps(size_t(k + 1));
+        double sumPs = 0.0;
+        for (int s = 0; s <= k; ++s) {  // t = k + 1 − s ≥ 1
+            double p = 1.0;
+            for (int i = 0; i < s; ++i) p *= pL[size_t(i)];
+            for (int i = s; i < k; ++i) p *= pE[size_t(i)];
+            ps[size_t(s)] = std::pow(p, beta);
+            sumPs += ps[size_t(s)];
+        }
+        double sumW = 0.0;
+        std::vector<PathVertex> ys, zs;
+        for (int s = 0; s <= k; ++s) {
+            int t = k + 1 - s;
+            splitPath(x, pL, pE, s, lightMaterial, ys, zs);
+            float w = bdptStrategyWeight(ctx, ys, zs, s, t, s > 0 ? &ys.back() : nullptr, &zs.back(), h);
+            expectRelNear(w, ps[size_t(s)] / sumPs, 2e-3, "weight of (s=" + std::to_string(s) + ", t=" + std::to_string(t) + ")");
+            sumW += w;
+        }
+        EXPECT_NEAR(sumW, 1.0, 1e-4) << "path of " << k + 1 << " vertices";
+    }
+    return true;
+}
+
 }  // namespace
 
 TEST(BdptMis, StoredDensitiesMatchAndWeightsOfAllStrategiesSumToOne) {
@@ -33,74 +105,16 @@ TEST(BdptMis, StoredDensitiesMatchAndWeightsOfAllStrategiesSumToOne) {
         Sampler sampler(Vec2i(int(trial % 32), int(trial / 32)), trial, 17);
         traceCameraSubpath(ctx, Vec2f(float(trial % 32) + 0.5f, float((trial / 32) % 32) + 0.5f), sampler, -1, camera);
         traceLightSubpath(ctx, sampler, -1, light);
-        // 1. What the walks stored equals the densities recomputed from the vertices.
-        for (size_t j = 1; j < camera.size(); ++j) {
-            float fwd = pdfNextA(ctx, j >= 2 ? &camera[j - 2] : nullptr, camera[j - 1], camera[j]);
-            expectRelNear(camera[j].pdfFwdA, fwd, 1e-3, "camera pdfFwdA");
-            if (j + 2 < camera.size())
-                expectRelNear(camera[j].pdfRevA, pdfNextA(ctx, &camera[j + 2], camera[j + 1], camera[j]), 1e-3, "camera pdfRevA");
-        }
-        for (size_t j = 1; j < light.size(); ++j) {
-            float fwd = pdfNextA(ctx, j >= 2 ? &light[j - 2] : nullptr, light[j - 1], light[j]);
-            expectRelNear(light[j].pdfFwdA, fwd, 1e-3, "light pdfFwdA");
-            if (j + 2 < light.size())
-                expectRelNear(light[j].pdfRevA, pdfNextA(ctx, &light[j + 2], light[j + 1], light[j]), 1e-3, "light pdfRevA");
-        }
+        expectStoredDensitiesMatch(ctx, camera, "camera");
+        expectStoredDensitiesMatch(ctx, light, "light");
         if (!light.empty()) expectRelNear(light[0].pdfFwdA, pdfLightOriginA(ctx, light[0]), 1e-5, "light origin");
 
-        // 2. A full path x0 … xk: x0 the light sub-path's origin, then the camera sub-path reversed.
+        // A full path x0 … xk: x0 the light sub-path's origin, then the camera sub-path reversed.
         if (camera.size() < 2 || light.empty()) continue;
         std::vector<PathVertex> x;
         x.push_back(light[0]);
         for (size_t j = camera.size(); j-- > 0;) x.push_back(camera[j]);
-        const int k = int(x.size()) - 1;
-        // p→(x_i): density from the light side; p←(x_i): from the camera side (x_k is the lens).
-        std::vector<double> pL(size_t(k + 1), 0.0), pE(size_t(k + 1), 0.0);
-        pL[0] = pdfLightOriginA(ctx, x[0]);
-        for (int i = 1; i <= k - 1; ++i) pL[size_t(i)] = pdfNextA(ctx, i >= 2 ? &x[size_t(i - 2)] : nullptr, x[size_t(i - 1)], x[size_t(i)]);
-        for (int i = k - 1; i >= 0; --i) pE[size_t(i)] = pdfNextA(ctx, i + 2 <= k ? &x[size_t(i + 2)] : nullptr, x[size_t(i + 1)], x[size_t(i)]);
-        bool positive = true;
-        for (int i = 0; i < k; ++i) positive = positive && pL[size_t(i)] > 0.0 && pE[size_t(i)] > 0.0;
-        if (!positive) continue;  // e.g. x1 behind the one-sided light: such paths carry no light
-        ++pathsChecked;
-
-        for (MisHeuristic h : {MisHeuristic::Power, MisHeuristic::Balance}) {
-            double beta = h == MisHeuristic::Power ? 2.0 : 1.0;
-            std::vector<double> ps(size_t(k + 1));
-            double sumPs = 0.0;
-            for (int s = 0; s <= k; ++s) {  // t = k + 1 − s ≥ 1
-                double p = 1.0;
-                for (int i = 0; i < s; ++i) p *= pL[size_t(i)];
-                for (int i = s; i < k; ++i) p *= pE[size_t(i)];
-                ps[size_t(s)] = std::pow(p, beta);
-                sumPs += ps[size_t(s)];
-            }
-            double sumW = 0.0;
-            for (int s = 0; s <= k; ++s) {
-                int t = k + 1 - s;
-                // Sub-paths as the walks would have produced them for this split.
-                std::vector<PathVertex> ys(x.begin(), x.begin() + s), zs;
-                for (int i = 0; i < s; ++i) ys[size_t(i)].pdfFwdA = float(pL[size_t(i)]), ys[size_t(i)].pdfRevA = float(pE[size_t(i)]);
-                for (int i = k; i >= s; --i) {
-                    PathVertex v = x[size_t(i)];
-                    v.pdfFwdA = float(pE[size_t(i)]);
-                    v.pdfRevA = float(pL[size_t(i)]);
-                    zs.push_back(v);
-                }
-                if (s == 0) {
-                    // The camera sub-path's end lies on the light as an ordinary surface hit.
-                    PathVertex& e = zs.back();
-                    e.type = VertexType::Surface;
-                    e.materialId = lightMaterial;
-                    e.ns = e.ng;
-                    e.woWorld = glm::normalize(x[1].p - x[0].p);
-                }
-                float w = bdptStrategyWeight(ctx, ys, zs, s, t, s > 0 ? &ys.back() : nullptr, &zs.back(), h);
-                expectRelNear(w, ps[size_t(s)] / sumPs, 2e-3, "weight of (s=" + std::to_string(s) + ", t=" + std::to_string(t) + ")");
-                sumW += w;
-            }
-            EXPECT_NEAR(sumW, 1.0, 1e-4) << "path of " << k + 1 << " vertices";
-        }
+        if (checkWeightsOfPath(ctx, x, lightMaterial)) ++pathsChecked;
     }
     EXPECT_GE(pathsChecked, 50);
 }

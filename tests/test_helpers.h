@@ -6,7 +6,9 @@
 #include <unistd.h>
 #include <vector>
 
+#include "integrators/integrator.h"
 #include "render/film.h"
+#include "render/renderer.h"
 #include "scene/assets.h"
 #include "scene/scene.h"
 
@@ -102,5 +104,35 @@ inline Scene closedSphere(Rgb albedo, Rgb Le, bool asMesh, const std::vector<Poi
     scene.camera->focusDistance = 0.6f;
     return scene;
 }
+
+// ===== Render set-up: one helper for every test that renders a scene ==============================
+
+/// A finished test render: the film and the scheduler's figures.
+struct TestRender {
+    Film film;
+    RenderStats stats;
+};
+
+/// Renders `scene` through its own camera at width x height with `integrator` on `accel`: the
+/// camera, context, film and renderImage call every render test needs. `options` carries spp,
+/// seed, threads, tile size and cancellation; `maxDepth` is RenderContext's (-1: unlimited).
+inline TestRender renderScene(const Scene& scene, const Accel& accel, const Integrator& integrator, int width, int height,
+                              const RenderOptions& options, int maxDepth = -1) {
+    Camera camera(*scene.camera, width, height);
+    RenderContext ctx{scene, accel, camera, maxDepth};
+    TestRender r{Film(width, height), RenderStats{}};
+    r.stats = renderImage(ctx, integrator, r.film, options);
+    return r;
+}
+
+/// The same with the integrator and the acceleration structure given by name ("ptnee", "embree").
+inline TestRender renderScene(const Scene& scene, const std::string& integratorName, int width, int height,
+                              const RenderOptions& options, const std::string& accelName = "embree", int maxDepth = -1) {
+    std::unique_ptr<Accel> accel = createAccel(accelName, scene.geometry);
+    std::unique_ptr<Integrator> integrator = createIntegrator(integratorName);
+    return renderScene(scene, *accel, *integrator, width, height, options, maxDepth);
+}
+
+// ===== End of the render set-up ===================================================================
 
 }  // namespace tessera::test

@@ -1,6 +1,7 @@
-// Whole-renderer tests: the white furnace (an analytic answer) and thread-count determinism.
+// Whole-renderer tests: the white furnace (an analytic answer), thread-count determinism and cancellation.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cstring>
 
 #include "integrators/integrator.h"
@@ -13,13 +14,9 @@ using namespace tessera;
 namespace {
 
 void expectFurnace(const Scene& scene, Rgb albedo, Rgb Le, int spp) {
-    auto accel = createAccel("embree", scene.geometry);
-    auto integrator = createIntegrator("ptnee");
-    Camera camera(*scene.camera, 48, 48);
-    RenderContext ctx{scene, *accel, camera, -1};
-    Film film(48, 48);
-    RenderOptions opt{.spp = spp, .seed = 1234};
-    RenderStats stats = renderImage(ctx, *integrator, film, opt);
+    test::TestRender r = test::renderScene(scene, "ptnee", 48, 48, RenderOptions{.spp = spp, .seed = 1234});
+    const Film& film = r.film;
+    RenderStats stats = r.stats;
     EXPECT_EQ(stats.nonFiniteDropped, 0u);
     double mean[3], se[3];
     test::pixelMean(film, mean, se);
@@ -46,17 +43,11 @@ TEST(Furnace, TriangleMeshSphereGivesLeOverOneMinusAlbedo) {
 TEST(Determinism, OneAndTwoThreadsGiveTheSameBits) {
     std::vector<std::string> warnings;
     Scene scene = loadGltfScene(test::sourcePath("scenes/cornell-box/cornell-box.gltf"), warnings);
-    auto accel = createAccel("embree", scene.geometry);
-    auto integrator = createIntegrator("ptnee");
-    Camera camera(*scene.camera, 80, 60);
-    RenderContext ctx{scene, *accel, camera, -1};
     std::vector<float> images[2];
-    for (int threads : {1, 2}) {
-        Film film(80, 60);
-        RenderOptions opt{.spp = 8, .threads = threads, .seed = 7, .tileSize = 16};
-        renderImage(ctx, *integrator, film, opt);
-        images[threads - 1] = film.rgba();
-    }
+    for (int threads : {1, 2})
+        images[threads - 1] =
+            test::renderScene(scene, "ptnee", 80, 60, RenderOptions{.spp = 8, .threads = threads, .seed = 7, .tileSize = 16})
+                .film.rgba();
     ASSERT_EQ(images[0].size(), images[1].size());
     EXPECT_EQ(std::memcmp(images[0].data(), images[1].data(), images[0].size() * sizeof(float)), 0);
     double sum = 0;
@@ -64,17 +55,59 @@ TEST(Determinism, OneAndTwoThreadsGiveTheSameBits) {
     EXPECT_GT(sum, 0.0);
 }
 
+namespace {
+/// ptnee that raises `cancel` once it has taken `cancelAfter` samples, as Ctrl-C would mid-render.
+class CancellingIntegrator final : public Integrator {
+public:
+    CancellingIntegrator(std::atomic<bool>& cancel, uint64_t cancelAfter) : cancel_(cancel), cancelAfter_(cancelAfter) {}
+    std::string_view name() const override { return "ptnee"; }
+    Rgb sample(const RenderContext& ctx, Vec2i pixel, Vec2f raster, Sampler& sampler, SplatSink& splats) const override {
+        if (taken_.fetch_add(1) + 1 == cancelAfter_) cancel_.store(true);
+        return ptnee_->sample(ctx, pixel, raster, sampler, splats);
+    }
+
+private:
+    std::unique_ptr<Integrator> ptnee_ = createIntegrator("ptnee");
+    std::atomic<bool>& cancel_;
+    uint64_t cancelAfter_;
+    mutable std::atomic<uint64_t> taken_{0};
+};
+}  // namespace
+
+// Cancelled inside the second pass (passes take 1, 1, 2 spp): the scheduler finishes the tiles it
+// has started, skips the rest, and the film keeps the complete first pass plus those tiles, each
+// pixel bit-identical to an uninterrupted render with the same number of samples.
 TEST(Render, CancelledRenderStopsAndKeepsWhatItHas) {
     std::vector<std::string> warnings;
     Scene scene = loadGltfScene(test::sourcePath("scenes/cornell-box/cornell-box.gltf"), warnings);
     auto accel = createAccel("embree", scene.geometry);
-    auto integrator = createIntegrator("ptnee");
-    Camera camera(*scene.camera, 64, 64);
-    RenderContext ctx{scene, *accel, camera, -1};
-    Film film(64, 64);
-    std::atomic<bool> cancel{true};
-    RenderOptions opt{.spp = 4, .cancel = &cancel};
-    RenderStats stats = renderImage(ctx, *integrator, film, opt);
-    EXPECT_TRUE(stats.interrupted);
-    EXPECT_EQ(stats.sppCompleted, 0u);
+    const int size = 64, tileSize = 16;
+    const uint64_t pixels = uint64_t(size) * size;
+    std::atomic<bool> cancel{false};
+    CancellingIntegrator cancelling(cancel, /* cancelAfter = */ pixels + 1);  // the second pass's first sample
+    RenderOptions opt{.spp = 4, .threads = 2, .seed = 5, .tileSize = tileSize, .cancel = &cancel};
+    test::TestRender cut = test::renderScene(scene, *accel, cancelling, size, size, opt);
+    EXPECT_TRUE(cut.stats.interrupted);
+    EXPECT_EQ(cut.stats.sppCompleted, 1u);
+
+    auto ptnee = createIntegrator("ptnee");
+    auto uninterrupted = [&](int spp) {
+        return test::renderScene(scene, *accel, *ptnee, size, size, RenderOptions{.spp = spp, .threads = 2, .seed = 5, .tileSize = tileSize})
+            .film;
+    };
+    Film oneSpp = uninterrupted(1), twoSpp = uninterrupted(2);
+    uint64_t secondPassPixels = 0;
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            uint32_t n = cut.film.sampleCount(x, y);
+            ASSERT_TRUE(n == 1 || n == 2) << x << "," << y << ": " << n << " samples";
+            secondPassPixels += n - 1;
+            const Film& same = n == 1 ? oneSpp : twoSpp;
+            for (int c = 0; c < 3; ++c) ASSERT_EQ(cut.film.pixel(x, y)[c], same.pixel(x, y)[c]) << x << "," << y;
+        }
+    // Whole tiles of the second pass, at least the one that raised the flag, and not all of them.
+    EXPECT_EQ(secondPassPixels % uint64_t(tileSize * tileSize), 0u);
+    EXPECT_GE(secondPassPixels, uint64_t(tileSize * tileSize));
+    EXPECT_LT(secondPassPixels, pixels);
+    EXPECT_EQ(cut.stats.samples, pixels + secondPassPixels);
 }

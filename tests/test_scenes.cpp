@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "core/fnv1a.h"
 #include "integrators/integrator.h"
 #include "io/image_output.h"
 #include "reference_ztest.h"
@@ -74,32 +75,15 @@ Scene loadShipped(const ShippedScene& s) {
 Film render(const Scene& scene, const Accel& accel, const std::string& integratorName, int w, int h, int spp, uint64_t seed,
             uint64_t* nonFinite = nullptr) {
     std::unique_ptr<Integrator> integrator = createIntegrator(integratorName);
-    Camera camera(*scene.camera, w, h);
-    RenderContext ctx{scene, accel, camera, -1};
-    Film film(w, h);
-    RenderOptions opt{.spp = spp, .seed = seed};
-    RenderStats stats = renderImage(ctx, *integrator, film, opt);
-    if (nonFinite) *nonFinite = stats.nonFiniteDropped;
-    return film;
+    test::TestRender r = test::renderScene(scene, accel, *integrator, w, h, RenderOptions{.spp = spp, .seed = seed});
+    if (nonFinite) *nonFinite = r.stats.nonFiniteDropped;
+    return std::move(r.film);
 }
 
 std::string metadata(const io::Image& image, const std::string& key) {
     for (const auto& [k, v] : image.metadata)
         if (k == key) return v;
     return "";
-}
-
-/// FNV-1a 64 of a file, formatted like the renderer's tessera:scene_hash metadata.
-std::string fnv1aOfFile(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    uint64_t h = 0xcbf29ce484222325ULL;
-    for (char c; in.get(c);) {
-        h ^= uint8_t(c);
-        h *= 0x100000001b3ULL;
-    }
-    char out[32];
-    std::snprintf(out, sizeof out, "fnv1a64:%016llx", static_cast<unsigned long long>(h));
-    return out;
 }
 
 struct Reference {
@@ -130,6 +114,9 @@ test::ZTestResult zTest(const Reference& ref, const std::vector<float>& rgba, in
     in.bin = bin;
     return test::referenceZTest(in);
 }
+
+/// What gtest prints for a parameter (the test name carries it too): the scene's name, not its bytes.
+void PrintTo(const ShippedScene& s, std::ostream* os) { *os << s.name; }
 
 class ShippedSceneTest : public testing::TestWithParam<ShippedScene> {};
 
@@ -210,7 +197,7 @@ TEST_P(ShippedSceneTest, MatchesItsReference) {
     if (s.needsDragon && !dragonAvailable()) GTEST_SKIP() << kNoDragon;
     Reference ref = loadReference(s.name);
     ASSERT_FALSE(ref.integrator.empty()) << "refs/" << s.name << ".exr has no tessera:integrator";
-    ASSERT_EQ(metadata(ref.mean, "tessera:scene_hash"), fnv1aOfFile(test::sourcePath(s.path)))
+    ASSERT_EQ(metadata(ref.mean, "tessera:scene_hash"), fnv1a64OfFile(test::sourcePath(s.path)))
         << s.path << " changed since refs/" << s.name << ".exr was made: run python3 tools/make_refs.py " << s.name;
     ASSERT_GE(ref.samples, 16.0 * s.testSpp) << "the reference's variance must be >= 16x below the test's";
     ASSERT_EQ(ref.stderr_.width, ref.mean.width);

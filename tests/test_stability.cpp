@@ -2,7 +2,7 @@
 // pinned as seeded numeric tests on the failure-mode scenes. Each test states what the study found
 // and asserts it with a tolerance; every region is chosen from renders with one set of seeds and
 // measured with renders of other seeds, so the selection's noise cannot leak into the measurement.
-// Resolutions and sample counts are small: the whole file takes a few seconds on 2 cores.
+// Resolutions and sample counts are small, so the file runs in seconds.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -27,13 +27,9 @@ Scene loadScene(const std::string& relative) {
 
 Film renderFilm(const Scene& scene, const Integrator& integrator, int w, int h, int spp, uint64_t seed) {
     auto accel = createAccel("embree", scene.geometry);
-    Camera camera(*scene.camera, w, h);
-    RenderContext ctx{scene, *accel, camera, /* maxDepth = */ -1};
-    Film film(w, h);
-    RenderOptions opt{.spp = spp, .seed = seed};
-    RenderStats stats = renderImage(ctx, integrator, film, opt);
-    EXPECT_EQ(stats.nonFiniteDropped, 0u) << integrator.name();
-    return film;
+    test::TestRender r = test::renderScene(scene, *accel, integrator, w, h, RenderOptions{.spp = spp, .seed = seed});
+    EXPECT_EQ(r.stats.nonFiniteDropped, 0u) << integrator.name();
+    return std::move(r.film);
 }
 
 /// Per-pixel luminance (Rec. 709) of a render with the named integrator.

@@ -14,7 +14,7 @@
 #include "validation/validate.h"
 #include "core/error.h"
 #include "core/version.h"
-#include "scene/mesh_loader.h"
+#include "scene/scene_loader.h"
 
 namespace tessera::api {
 

@@ -19,7 +19,7 @@
 #include "accel/kdtree_accel.h"
 #include "app/commands.h"
 #include "core/error.h"
-#include "scene/mesh_loader.h"
+#include "scene/scene_loader.h"
 #include "validation/ray_sets.h"
 
 namespace tessera::app {

@@ -16,7 +16,6 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", std::string("tessera ") + versionString() + " (" + gitRevision() + ")");
     app.footer("Run 'tessera COMMAND --help' for the options of a command.\n"
                "Example: tessera render scenes/cornell-box/cornell-box.gltf -o out/cornell-box.exr --spp 64");
-    std::vector<std::pair<CLI::App*, app::Runner>> commands;
     app::Runner render = app::addRenderCommand(app);
     app::Runner compare = app::addCompareCommand(app);
     app::Runner validateAccel = app::addValidateAccelCommand(app);

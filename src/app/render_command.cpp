@@ -9,11 +9,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "accel/accel.h"
 #include "app/commands.h"
 #include "core/error.h"
+#include "core/fnv1a.h"
 #include "core/version.h"
 #include "integrators/bdpt.h"
 #include "integrators/integrator.h"
@@ -32,7 +34,8 @@ struct RenderArgs {
     std::string scene, output, png, resolution, integrator, accel, lookAt, display = "sRGB", view = "Standard";
     std::string bdptStrategies;  ///< directory for the per-strategy debug images (empty: none)
     std::string debugPixel;  ///< "x,y,s": replay one sample with a trace instead of rendering
-    int spp = 0, threads = 0, maxDepth = -2;
+    int spp = 0, threads = 0;
+    std::optional<int> maxDepth;  ///< --max-depth; unset: the scene's
     double timeLimit = 0.0, fovDeg = 0.0;
     int64_t seed = -1;
     bool quiet = false, json = false, noPng = false, allowExternalFiles = false;
@@ -41,22 +44,6 @@ struct RenderArgs {
     bool resume = false;
     uint64_t stopAfterTiles = 0;      ///< test hook (hidden option)
 };
-
-/// FNV-1a 64 of the scene file: identifies the exact input in the output's metadata.
-std::string hashFile(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    uint64_t h = 0xcbf29ce484222325ULL;
-    char buf[1 << 16];
-    while (in.read(buf, sizeof buf) || in.gcount() > 0) {
-        for (std::streamsize i = 0; i < in.gcount(); ++i) {
-            h ^= uint8_t(buf[i]);
-            h *= 0x100000001b3ULL;
-        }
-    }
-    char out[32];
-    std::snprintf(out, sizeof out, "fnv1a64:%016llx", static_cast<unsigned long long>(h));
-    return out;
-}
 
 std::vector<float> parseNumbers(const std::string& text, const std::string& option) {
     std::vector<float> v;
@@ -141,7 +128,7 @@ CheckpointHeader checkpointHeader(const RenderArgs& a, const RenderSettings& s, 
     camera += exact(cam.yfov) + "," + exact(cam.apertureRadius) + "," + exact(cam.focusDistance);
     return {
         {"renderer", std::string("tessera ") + versionString() + " (" + gitRevision() + ")"},
-        {"scene_hash", hashFile(a.scene)},
+        {"scene_hash", fnv1a64OfFile(a.scene)},
         {"integrator", std::string(integrator.name())},
         {"seed", std::to_string(s.seed)},
         {"resolution", std::to_string(s.width) + "x" + std::to_string(s.height)},
@@ -166,29 +153,26 @@ std::string describe(const SampleId& id) {
     return "pixel (" + std::to_string(id.x) + "," + std::to_string(id.y) + ") sample " + std::to_string(id.sample);
 }
 
-int runRender(const RenderArgs& a) {
-    std::vector<std::string> warnings;
-    SceneLoadOptions loadOptions;
-    loadOptions.allowExternalFiles = a.allowExternalFiles;
-    loadOptions.maxFileBytes = uint64_t(a.maxMemoryGiB * double(1ull << 30));
-    Scene scene = loadGltfScene(a.scene, warnings, loadOptions);
-    for (const std::string& w : warnings) printWarning(w);
+/// "640x480" → (width, height), each side 1..65536.
+void parseResolution(const std::string& text, int& width, int& height) {
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    std::stringstream ss(text);
+    if (!(ss >> w >> x >> h) || (x != 'x' && x != 'X') || (ss >> extra) || w < 1 || h < 1 || w > 65536 || h > 65536)
+        throw InputError("--resolution must look like 640x480 (each side 1..65536), got '" + text + "'");
+    width = w;
+    height = h;
+}
 
+/// The scene's render settings with the command line's overrides. The camera options change
+/// `scene.camera`; a scene without a camera needs --look-at.
+RenderSettings resolveSettings(const RenderArgs& a, Scene& scene) {
     RenderSettings s = scene.settings;
-    if (!a.resolution.empty()) {
-        int w = 0, h = 0;
-        char x = 0, extra = 0;
-        std::stringstream ss(a.resolution);
-        if (!(ss >> w >> x >> h) || (x != 'x' && x != 'X') || (ss >> extra) || w < 1 || h < 1 || w > 65536 || h > 65536)
-            throw InputError("--resolution must look like 640x480 (each side 1..65536), got '" + a.resolution + "'");
-        s.width = w;
-        s.height = h;
-    }
+    if (!a.resolution.empty()) parseResolution(a.resolution, s.width, s.height);
     if (a.spp > 0) s.spp = a.spp;
-    if (a.maxDepth >= -1) s.maxDepth = a.maxDepth;
+    if (a.maxDepth) s.maxDepth = *a.maxDepth;
     if (a.seed >= 0) s.seed = uint64_t(a.seed);
     if (!a.integrator.empty()) s.integrator = a.integrator;
-    std::string accelName = a.accel.empty() ? "embree" : a.accel;
 
     if (!a.lookAt.empty()) {
         CameraDesc d = scene.camera.value_or(CameraDesc{});
@@ -201,98 +185,117 @@ int runRender(const RenderArgs& a) {
     }
     if (!scene.camera)
         throw SceneError(a.scene, "cameras", "the scene has no camera; give one with --look-at EX,EY,EZ,TX,TY,TZ [--fov DEG]");
+    return s;
+}
 
-    // The film keeps sum, sum of squares and splats in double per channel plus a count: refuse a
-    // resolution whose film alone would exceed the memory limit instead of dying in the allocator.
-    double filmBytes = double(s.width) * double(s.height) * (9.0 * sizeof(double) + sizeof(uint32_t) + 4 * sizeof(float));
+/// Refuses a resolution whose film alone would exceed the memory limit, instead of dying in the
+/// allocator.
+void checkFilmFits(const RenderArgs& a, const RenderSettings& s) {
+    double filmBytes = Film::memoryBytes(s.width, s.height);
     if (filmBytes > a.maxMemoryGiB * double(1ull << 30))
         throw InputError(a.scene + ": " + (a.resolution.empty() ? "extensions.TESSERA_render: " : "--resolution: ") +
                          "resolution " + std::to_string(s.width) + "x" + std::to_string(s.height) + " needs " +
                          std::to_string(int(filmBytes / double(1ull << 30) + 0.5)) + " GiB of film memory, over the limit of " +
                          std::to_string(int(a.maxMemoryGiB)) + " GiB (--max-memory)");
-    std::string exrPath = a.output.empty() ? "out/" + stem(a.scene) + ".exr" : a.output;
-    std::string pngPath = a.noPng ? "" : (a.png.empty() ? std::filesystem::path(exrPath).replace_extension(".png").string() : a.png);
-    // Validate the display transform before spending time on the render.
+}
+
+/// Where the images go; `display` is set when a PNG is written (checked before the render starts).
+struct OutputPaths {
+    std::string exr, png;  ///< png empty: no PNG
     std::optional<io::DisplayTransform> display;
-    if (!pngPath.empty()) display.emplace(a.display, a.view);
+};
 
-    std::unique_ptr<Integrator> integrator = createIntegrator(s.integrator);
-    AccelOptions accelOptions;
-    accelOptions.threads = a.threads;
-    std::unique_ptr<Accel> accel = createAccel(accelName, scene.geometry, accelOptions);
-    Camera camera(*scene.camera, s.width, s.height);
-    RenderContext ctx{scene, *accel, camera, s.maxDepth};
+OutputPaths outputPaths(const RenderArgs& a) {
+    OutputPaths o;
+    o.exr = a.output.empty() ? "out/" + stem(a.scene) + ".exr" : a.output;
+    o.png = a.noPng ? "" : (a.png.empty() ? std::filesystem::path(o.exr).replace_extension(".png").string() : a.png);
+    if (!o.png.empty()) o.display.emplace(a.display, a.view);
+    return o;
+}
 
-    if (!a.debugPixel.empty()) {
-        SampleId id = parseDebugPixel(a.debugPixel, s.width, s.height);
-        SampleReplay r = replaySample(ctx, *integrator, id, s.seed, std::cerr);
-        if (a.json) {
-            nlohmann::json splats = nlohmann::json::array();
-            for (const SplatSink::Entry& e : r.splats) splats.push_back({e.pixelIndex, {e.value.r, e.value.g, e.value.b}});
-            // Non-finite floats become null in JSON: "finite" says which.
-            std::cout << nlohmann::json{{"pixel", {id.x, id.y}}, {"sample", id.sample}, {"seed", s.seed},
-                                        {"radiance", {r.radiance.r, r.radiance.g, r.radiance.b}}, {"finite", r.finite},
-                                        {"rays", r.rays}, {"trace_records", r.vertices}, {"splats", splats}}.dump()
-                      << std::endl;
-        } else {
-            std::printf("%s: radiance %.9g %.9g %.9g%s\n", describe(id).c_str(), double(r.radiance.r), double(r.radiance.g),
-                        double(r.radiance.b), r.finite ? "" : " (NON-FINITE)");
+/// `--debug-pixel x,y,s`: replays one sample with a trace on stderr and prints its radiance.
+int runDebugPixel(const RenderArgs& a, const RenderContext& ctx, const Integrator& integrator, const RenderSettings& s) {
+    SampleId id = parseDebugPixel(a.debugPixel, s.width, s.height);
+    SampleReplay r = replaySample(ctx, integrator, id, s.seed, std::cerr);
+    if (a.json) {
+        nlohmann::json splats = nlohmann::json::array();
+        for (const SplatSink::Entry& e : r.splats) splats.push_back({e.pixelIndex, {e.value.r, e.value.g, e.value.b}});
+        // Non-finite floats become null in JSON: "finite" says which.
+        std::cout << nlohmann::json{{"pixel", {id.x, id.y}}, {"sample", id.sample}, {"seed", s.seed},
+                                    {"radiance", {r.radiance.r, r.radiance.g, r.radiance.b}}, {"finite", r.finite},
+                                    {"rays", r.rays}, {"trace_records", r.vertices}, {"splats", splats}}.dump()
+                  << std::endl;
+    } else {
+        std::printf("%s: radiance %.9g %.9g %.9g%s\n", describe(id).c_str(), double(r.radiance.r), double(r.radiance.g),
+                    double(r.radiance.b), r.finite ? "" : " (NON-FINITE)");
+    }
+    return 0;
+}
+
+/// `--checkpoint SEC` and `--resume`: OUT.exr.ckpt beside the image, written every SEC seconds (at
+/// pass boundaries) and whenever the render stops early; --resume continues one and keeps it up to
+/// date. Must outlive the render it is attached to.
+class Checkpoints {
+public:
+    Checkpoints(const RenderArgs& a, const std::string& exrPath, CheckpointHeader header)
+        : path_(exrPath + ".ckpt"), enabled_(a.checkpointSeconds >= 0.0 || a.resume), everySeconds_(a.checkpointSeconds),
+          header_(std::move(header)) {}
+
+    /// With --resume, loads the checkpoint into `film` and `ro`; when enabled, has `ro` write them.
+    void attach(const RenderArgs& a, Film& film, RenderOptions& ro) {
+        if (a.resume) {
+            resumed_ = readCheckpoint(path_, header_, film);
+            ro.resume = &resumed_;
+            if (!a.quiet)
+                std::cerr << "tessera: resuming " << path_ << " at " << resumed_.sppDone << " spp"
+                          << (resumed_.tileDone.empty() ? "" : " (inside a pass)") << std::endl;
         }
-        return 0;
+        last_ = std::chrono::steady_clock::now();
+        if (enabled_) ro.onPassEnd = [this](const Film& f, const RenderState& state, bool interrupted) { write(f, state, interrupted); };
+    }
+    /// A finished render leaves nothing to resume: a stale checkpoint would only mislead.
+    void finish(const RenderStats& stats) const {
+        if (!enabled_ || stats.interrupted) return;
+        std::error_code ignored;
+        std::filesystem::remove(path_, ignored);
+    }
+    bool enabled() const { return enabled_; }
+    const std::string& path() const { return path_; }
+    /// Camera samples the resumed checkpoint had taken (0 without --resume).
+    uint64_t samplesResumed() const { return resumed_.samples; }
+
+private:
+    void write(const Film& f, const RenderState& state, bool interrupted) {
+        double since = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_).count();
+        if (!interrupted && since < everySeconds_) return;
+        try {
+            writeCheckpoint(path_, header_, f, state);
+        } catch (const InputError& e) {
+            // Losing a checkpoint must not lose the render itself.
+            printWarning(e.what());
+        }
+        last_ = std::chrono::steady_clock::now();
     }
 
-    Film film(s.width, s.height);
-    RenderOptions ro;
-    ro.spp = s.spp;
-    ro.timeLimitSeconds = a.timeLimit;
-    ro.threads = a.threads;
-    ro.seed = s.seed;
-    ro.stopAfterTiles = a.stopAfterTiles;
+    std::string path_;
+    bool enabled_;
+    double everySeconds_;
+    CheckpointHeader header_;
+    RenderState resumed_;
+    std::chrono::steady_clock::time_point last_;
+};
 
-    // Checkpoints: OUT.exr.ckpt beside the image, every --checkpoint SEC (at pass boundaries) and
-    // whenever the render stops early; --resume continues one and keeps it up to date.
-    const std::string checkpointPath = exrPath + ".ckpt";
-    const bool checkpointing = a.checkpointSeconds >= 0.0 || a.resume;
-    CheckpointHeader header = checkpointHeader(a, s, *scene.camera, *integrator, ro.tileSize);
-    RenderState resumed;
-    if (a.resume) {
-        resumed = readCheckpoint(checkpointPath, header, film);
-        ro.resume = &resumed;
-        if (!a.quiet)
-            std::cerr << "tessera: resuming " << checkpointPath << " at " << resumed.sppDone << " spp"
-                      << (resumed.tileDone.empty() ? "" : " (inside a pass)") << std::endl;
-    }
-    auto lastCheckpoint = std::chrono::steady_clock::now();
-    if (checkpointing)
-        ro.onPassEnd = [&](const Film& f, const RenderState& state, bool interrupted) {
-            double since = std::chrono::duration<double>(std::chrono::steady_clock::now() - lastCheckpoint).count();
-            if (!interrupted && since < a.checkpointSeconds) return;
-            try {
-                writeCheckpoint(checkpointPath, header, f, state);
-            } catch (const InputError& e) {
-                // Losing a checkpoint must not lose the render itself.
-                printWarning(e.what());
-            }
-            lastCheckpoint = std::chrono::steady_clock::now();
-        };
-
-    InterruptGuard guard;
-    interruptFlag().store(false);
-    ro.cancel = &interruptFlag();
-    uint64_t total = a.timeLimit > 0 ? 0 : uint64_t(s.width) * uint64_t(s.height) * uint64_t(s.spp);
-    if (a.resume) total -= std::min(total, resumed.samples);
-    ProgressReporter progress("render " + stem(a.scene), total, a.timeLimit, a.quiet);
-    ro.progress = &progress;
-    RenderStats stats = renderImage(ctx, *integrator, film, ro);
-
+/// What an output image records about its render.
+io::Metadata outputMetadata(const RenderArgs& a, const RenderSettings& s, const Integrator& integrator, const Accel& accel,
+                            const RenderStats& stats) {
     io::Metadata md = {
         {"Software", std::string("Tessera ") + versionString() + " (" + gitRevision() + ")"},
         {"tessera:version", versionString()},
         {"tessera:git", gitRevision()},
         {"tessera:scene", a.scene},
-        {"tessera:scene_hash", hashFile(a.scene)},
-        {"tessera:integrator", std::string(integrator->name())},
-        {"tessera:accel", std::string(accel->name())},
+        {"tessera:scene_hash", fnv1a64OfFile(a.scene)},
+        {"tessera:integrator", std::string(integrator.name())},
+        {"tessera:accel", std::string(accel.name())},
         {"tessera:spp", std::to_string(stats.sppCompleted)},
         {"tessera:samples", std::to_string(stats.samples)},
         {"tessera:seed", std::to_string(s.seed)},
@@ -305,22 +308,17 @@ int runRender(const RenderArgs& a) {
         {"tessera:resumed", a.resume ? "true" : "false"},
     };
     if (stats.firstNonFinite) md.push_back({"tessera:first_nonfinite", describe(*stats.firstNonFinite)});
-    std::vector<float> rgba = film.rgba();
-    io::writeExr(exrPath, s.width, s.height, rgba.data(), md);
-    if (display) io::writePng(pngPath, s.width, s.height, rgba.data(), *display, md);
-    // A finished render leaves nothing to resume: a stale checkpoint would only mislead.
-    if (checkpointing && !stats.interrupted) {
-        std::error_code ignored;
-        std::filesystem::remove(checkpointPath, ignored);
-    }
+    return md;
+}
 
-    if (!a.bdptStrategies.empty() && !stats.interrupted) writeBdptStrategyImages(a, s, ctx, ro, md);
+double samplesPerSecond(const RenderStats& stats) { return stats.seconds > 0 ? double(stats.samples) / stats.seconds : 0.0; }
 
-    double samplesPerSecond = stats.seconds > 0 ? double(stats.samples) / stats.seconds : 0.0;
+/// The closing progress line, and the warning that names the first non-finite sample.
+void printSummary(ProgressReporter& progress, const RenderStats& stats, const OutputPaths& out) {
     std::ostringstream summary;
-    summary << stats.sppCompleted << " spp in " << formatDuration(stats.seconds) << " ("
-            << samplesPerSecond / 1e6 << " M samples/s, " << stats.threads << " threads)"
-            << (stats.interrupted ? ", INTERRUPTED" : "") << " -> " << exrPath << (pngPath.empty() ? "" : ", " + pngPath);
+    summary << stats.sppCompleted << " spp in " << formatDuration(stats.seconds) << " (" << samplesPerSecond(stats) / 1e6
+            << " M samples/s, " << stats.threads << " threads)" << (stats.interrupted ? ", INTERRUPTED" : "") << " -> "
+            << out.exr << (out.png.empty() ? "" : ", " + out.png);
     progress.done(summary.str());
     if (stats.nonFiniteDropped > 0) {
         std::string where;
@@ -331,30 +329,78 @@ int runRender(const RenderArgs& a) {
         }
         printWarning(std::to_string(stats.nonFiniteDropped) + " non-finite sample(s) were dropped" + where);
     }
+}
 
-    if (a.json) {
-        nlohmann::json j = {
-            {"scene", a.scene},
-            {"integrator", std::string(integrator->name())},
-            {"accel", std::string(accel->name())},
-            {"spp", stats.sppCompleted},
-            {"samples", stats.samples},
-            {"seconds", stats.seconds},
-            {"build_seconds", accel->stats().buildSeconds},
-            {"resolution", {s.width, s.height}},
-            {"threads", stats.threads},
-            {"seed", s.seed},
-            {"outputs", pngPath.empty() ? nlohmann::json{{"exr", exrPath}} : nlohmann::json{{"exr", exrPath}, {"png", pngPath}}},
-            {"samples_per_second", samplesPerSecond},
-            {"nonfinite_dropped", stats.nonFiniteDropped},
-            {"interrupted", stats.interrupted},
-            {"resumed", a.resume},
-        };
-        if (stats.firstNonFinite)
-            j["first_nonfinite"] = {{"x", stats.firstNonFinite->x}, {"y", stats.firstNonFinite->y}, {"sample", stats.firstNonFinite->sample}};
-        if (checkpointing && stats.interrupted) j["checkpoint"] = checkpointPath;
-        std::cout << j.dump() << std::endl;
-    }
+/// `--json`: the run's figures as one JSON object on stdout.
+void printJson(const RenderArgs& a, const RenderSettings& s, const Integrator& integrator, const Accel& accel,
+               const RenderStats& stats, const OutputPaths& out, const Checkpoints& checkpoints) {
+    nlohmann::json j = {
+        {"scene", a.scene},
+        {"integrator", std::string(integrator.name())},
+        {"accel", std::string(accel.name())},
+        {"spp", stats.sppCompleted},
+        {"samples", stats.samples},
+        {"seconds", stats.seconds},
+        {"build_seconds", accel.stats().buildSeconds},
+        {"resolution", {s.width, s.height}},
+        {"threads", stats.threads},
+        {"seed", s.seed},
+        {"outputs", out.png.empty() ? nlohmann::json{{"exr", out.exr}} : nlohmann::json{{"exr", out.exr}, {"png", out.png}}},
+        {"samples_per_second", samplesPerSecond(stats)},
+        {"nonfinite_dropped", stats.nonFiniteDropped},
+        {"interrupted", stats.interrupted},
+        {"resumed", a.resume},
+    };
+    if (stats.firstNonFinite)
+        j["first_nonfinite"] = {{"x", stats.firstNonFinite->x}, {"y", stats.firstNonFinite->y}, {"sample", stats.firstNonFinite->sample}};
+    if (checkpoints.enabled() && stats.interrupted) j["checkpoint"] = checkpoints.path();
+    std::cout << j.dump() << std::endl;
+}
+
+int runRender(const RenderArgs& a) {
+    std::vector<std::string> warnings;
+    SceneLoadOptions loadOptions;
+    loadOptions.allowExternalFiles = a.allowExternalFiles;
+    loadOptions.maxFileBytes = uint64_t(a.maxMemoryGiB * double(1ull << 30));
+    Scene scene = loadGltfScene(a.scene, warnings, loadOptions);
+    for (const std::string& w : warnings) printWarning(w);
+
+    RenderSettings s = resolveSettings(a, scene);
+    checkFilmFits(a, s);
+    // Checked before spending time on the render: the paths and the display transform.
+    OutputPaths out = outputPaths(a);
+    std::unique_ptr<Integrator> integrator = createIntegrator(s.integrator);
+    AccelOptions accelOptions;
+    accelOptions.threads = a.threads;
+    std::unique_ptr<Accel> accel = createAccel(a.accel.empty() ? "embree" : a.accel, scene.geometry, accelOptions);
+    Camera camera(*scene.camera, s.width, s.height);
+    RenderContext ctx{scene, *accel, camera, s.maxDepth};
+    if (!a.debugPixel.empty()) return runDebugPixel(a, ctx, *integrator, s);
+
+    Film film(s.width, s.height);
+    RenderOptions ro{.spp = s.spp, .timeLimitSeconds = a.timeLimit, .threads = a.threads, .seed = s.seed};
+    ro.stopAfterTiles = a.stopAfterTiles;
+    Checkpoints checkpoints(a, out.exr, checkpointHeader(a, s, *scene.camera, *integrator, ro.tileSize));
+    checkpoints.attach(a, film, ro);
+
+    InterruptGuard guard;
+    interruptFlag().store(false);
+    ro.cancel = &interruptFlag();
+    uint64_t total = a.timeLimit > 0 ? 0 : uint64_t(s.width) * uint64_t(s.height) * uint64_t(s.spp);
+    total -= std::min(total, checkpoints.samplesResumed());
+    ProgressReporter progress("render " + stem(a.scene), total, a.timeLimit, a.quiet);
+    ro.progress = &progress;
+    RenderStats stats = renderImage(ctx, *integrator, film, ro);
+
+    io::Metadata md = outputMetadata(a, s, *integrator, *accel, stats);
+    std::vector<float> rgba = film.rgba();
+    io::writeExr(out.exr, s.width, s.height, rgba.data(), md);
+    if (out.display) io::writePng(out.png, s.width, s.height, rgba.data(), *out.display, md);
+    checkpoints.finish(stats);
+    if (!a.bdptStrategies.empty() && !stats.interrupted) writeBdptStrategyImages(a, s, ctx, ro, md);
+
+    printSummary(progress, stats, out);
+    if (a.json) printJson(a, s, *integrator, *accel, stats, out, checkpoints);
     return stats.interrupted ? 130 : 0;
 }
 

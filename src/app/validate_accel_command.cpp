@@ -8,7 +8,7 @@
 
 #include "validation/validate.h"
 #include "app/commands.h"
-#include "scene/mesh_loader.h"
+#include "scene/scene_loader.h"
 
 namespace tessera::app {
 

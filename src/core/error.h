@@ -17,14 +17,7 @@ public:
 class SceneError : public InputError {
 public:
     SceneError(const std::string& file, const std::string& element, const std::string& problem)
-        : InputError(file + ": " + (element.empty() ? std::string() : element + ": ") + problem),
-          file_(file), element_(element), problem_(problem) {}
-    const std::string& file() const { return file_; }
-    const std::string& element() const { return element_; }
-    const std::string& problem() const { return problem_; }
-
-private:
-    std::string file_, element_, problem_;
+        : InputError(file + ": " + (element.empty() ? std::string() : element + ": ") + problem) {}
 };
 
 }  // namespace tessera

@@ -5,7 +5,7 @@
 /// when every item is done, so consecutive calls are separated by a barrier. Items are claimed from
 /// one atomic counter in index order: no work stealing, no per-split copies of the loop body, and
 /// every hand-off is a std::mutex/std::condition_variable that ThreadSanitizer sees (Debian's
-/// libtbb is not instrumented, so under TSan its task hand-offs looked like races: writeup.md §10).
+/// libtbb is not instrumented, so under TSan its task hand-offs looked like races: writeup, "How correctness is tested").
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>

@@ -12,7 +12,7 @@ namespace tessera {
 // sample (bdpt_connect.cpp). The weights w_{s,t}(x) from bdptMisWeight sum to 1 over the strategies
 // that can sample x (and are 0 for those that cannot: delta endpoints), so Σ w·C* is unbiased
 // (Veach eq. 9.4 / Theorem 9.2). t = 1 strategies reach other pixels and are splatted with the same
-// 1/spp normalisation as light tracing (light_tracer.cpp).
+// 1/spp normalisation as light tracing (lt.cpp).
 Rgb BdptIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& sampler, SplatSink& splats) const {
     thread_local std::vector<PathVertex> camera, light;
     const int maxDepth = ctx.maxDepth;

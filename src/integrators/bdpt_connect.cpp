@@ -2,6 +2,8 @@
 
 #include <array>
 
+#include "integrators/next_event.h"
+
 namespace tessera {
 namespace {
 
@@ -90,14 +92,11 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
         r.raster = cs.raster;
         pt = &sampled;
     } else if (s == 1) {
-        // Next-event estimation: resample the light point from z(t−1).
-        if (!pt->connectible() || ctx.scene.lights().empty()) return r;
-        // Sample from the point offset to wo's side, as ptnee does (see path_tracer.cpp).
-        Vec3f pRef = offsetRayOrigin(pt->p, glm::dot(pt->woWorld, pt->ng) >= 0.f ? pt->ng : -pt->ng);
-        LightSample ls;
-        float uPick = sampler.get1D();
-        Vec2f uLight = sampler.get2D();
-        if (!ctx.scene.lights().sample(pRef, uPick, uLight, ls) || isBlack(ls.Le)) return r;
+        // Next-event estimation: resample the light point from z(t−1), exactly as ptnee samples it
+        // (integrators/next_event.h).
+        NextEventSample ne;
+        if (!pt->connectible() || !sampleNextEvent(ctx.scene.lights(), pt->p, pt->ng, pt->woWorld, sampler, ne)) return r;
+        const LightSample& ls = ne.light;
         sampled.type = VertexType::Light;
         sampled.p = ls.p;
         sampled.ng = sampled.ns = ls.n;
@@ -108,7 +107,7 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
         if (!(len > 0.f)) return r;
         Rgb f = evalVertex(ctx, *pt, sampled, TransportMode::Radiance);
         r.L = pt->beta * f * sampled.beta * cosAt(*pt, w / len);
-        if (isBlack(r.L) || !unoccluded(ctx, *pt, sampled)) return ConnectionResult{};
+        if (isBlack(r.L) || !lightVisible(ctx.accel, pt->p, pt->ng, ls)) return ConnectionResult{};
         qs = &sampled;
     } else {
         // General connection (Veach eq. 10.8): α_L · f(y) · G · f(z) · α_E.

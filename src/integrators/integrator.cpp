@@ -2,9 +2,9 @@
 
 #include "core/error.h"
 #include "integrators/bdpt.h"
-#include "integrators/bsdf_path_tracer.h"
-#include "integrators/light_tracer.h"
-#include "integrators/path_tracer.h"
+#include "integrators/lt.h"
+#include "integrators/pt.h"
+#include "integrators/ptnee.h"
 
 namespace tessera {
 
@@ -12,9 +12,9 @@ namespace tessera {
 std::vector<std::string> integratorNames() { return {"pt", "ptnee", "lt", "bdpt", "bdpt-balance"}; }
 
 std::unique_ptr<Integrator> createIntegrator(std::string_view name) {
-    if (name == "pt") return std::make_unique<BsdfPathTracer>();
-    if (name == "ptnee") return std::make_unique<PathTracer>();
-    if (name == "lt") return std::make_unique<LightTracer>();
+    if (name == "pt") return std::make_unique<PtIntegrator>();
+    if (name == "ptnee") return std::make_unique<PtNeeIntegrator>();
+    if (name == "lt") return std::make_unique<LtIntegrator>();
     if (name == "bdpt") return std::make_unique<BdptIntegrator>();
     if (name == "bdpt-balance") return std::make_unique<BdptIntegrator>(BdptSettings{MisHeuristic::Balance});
     std::string known;

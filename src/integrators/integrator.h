@@ -2,7 +2,7 @@
 /// \file integrator.h
 /// The integrator interface. An integrator estimates one camera sample at a time; the scheduler
 /// (render/) owns tiles, threads and the film. One virtual call per camera sample is cheap next to
-/// the path it traces (STYLE.md practice 4). Light tracing and BDPT reach pixels other than the
+/// the path it traces (pbrt-v4 makes the same choice). Light tracing and BDPT reach pixels other than the
 /// one being sampled through the SplatSink, which the scheduler merges deterministically.
 #include <memory>
 #include <string>
@@ -44,6 +44,7 @@ public:
         entries_.push_back({uint32_t(y) * uint32_t(width) + uint32_t(x), value});
     }
     std::vector<Entry>& entries() { return entries_; }
+    const std::vector<Entry>& entries() const { return entries_; }
     void clear() { entries_.clear(); }
 
 private:

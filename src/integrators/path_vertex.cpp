@@ -1,5 +1,7 @@
 #include "integrators/path_vertex.h"
 
+#include "integrators/russian_roulette.h"
+
 namespace tessera {
 
 float convertDensity(float pdfW, const PathVertex& from, const PathVertex& to) {
@@ -127,14 +129,8 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         beta *= bs.weight;
         rrScale *= maxComponent(bs.weight) * (mode == TransportMode::Radiance ? bs.eta * bs.eta : 1.f);
         if (isBlack(beta)) break;
-        // Russian roulette (Arvo & Kirk 1990) from the third vertex on: survive with q = min(1,
-        // rrScale) and divide by q, so every estimator stays unbiased. MIS weights do not include q:
-        // they only need to sum to one over the strategies (Veach 1997, §9.2.2), which they do.
-        if (out.size() >= 3 && rrScale < 1.f) {
-            if (sampler.get1D() >= rrScale) break;
-            beta /= rrScale;
-            rrScale = 1.f;
-        }
+        // Russian roulette from the third vertex on (integrators/russian_roulette.h).
+        if (out.size() >= 3 && !survivesRoulette(rrScale, beta, sampler, /* trace = */ nullptr)) break;
         ray = spawnRay(cur.p, cur.ng, bs.wiWorld);
     }
 }

@@ -75,8 +75,7 @@ std::vector<std::string> viewNames(const OCIO::Config& config, const std::string
 }  // namespace
 
 DisplayTransform::DisplayTransform(const std::string& display, const std::string& view,
-                                   const std::string& configPath)
-    : display_(display), view_(view) {
+                                   const std::string& configPath) {
     OCIO::ConstConfigRcPtr config = loadConfig(configPath);
     std::vector<std::string> views = viewNames(*config, display, configPath);
     if (std::find(views.begin(), views.end(), view) == views.end()) {

@@ -33,9 +33,6 @@ public:
     /// [0,1], so callers quantising to 8 bit must clamp.
     void apply(float* rgba, int width, int height) const;
 
-    const std::string& display() const { return display_; }
-    const std::string& view() const { return view_; }
-
     /// The displays of a config (`configPath` empty = the embedded one); the first is the default.
     static std::vector<std::string> displays(const std::string& configPath = {});
 
@@ -47,7 +44,6 @@ public:
 private:
     struct Impl;  // Keeps OpenColorIO's headers out of every file that includes this one.
     std::shared_ptr<const Impl> impl_;
-    std::string display_, view_;
 };
 
 }  // namespace tessera::io

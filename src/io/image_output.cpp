@@ -3,7 +3,6 @@
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
-#include <unistd.h>
 
 #include <atomic>
 #include <cmath>
@@ -12,9 +11,9 @@
 #include <memory>
 #include <stdexcept>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "io/display_transform.h"
-#include "render/interrupt.h"
 
 namespace tessera::io {
 
@@ -30,51 +29,10 @@ void checkArguments(const std::string& path, int width, int height, const float*
     }
 }
 
-/// A temporary name beside `path`, unique per process and per call, so that two processes (or two
-/// threads) writing the same destination never share a temporary file.
-std::string temporaryPath(const std::string& path) {
-    static std::atomic<unsigned> counter{0};
-    return path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
-}
-
-/// Removes the temporary file on every exit path unless the rename succeeded, including exits by
-/// exceptions thrown from inside OIIO or the allocator.
-class TemporaryFileGuard {
-public:
-    explicit TemporaryFileGuard(std::string path) : path_(std::move(path)) {}
-    ~TemporaryFileGuard() {
-        if (!path_.empty()) {
-            std::error_code ignored;
-            fs::remove(path_, ignored);
-        }
-    }
-    void release() { path_.clear(); }
-    TemporaryFileGuard(const TemporaryFileGuard&) = delete;
-    TemporaryFileGuard& operator=(const TemporaryFileGuard&) = delete;
-
-private:
-    std::string path_;
-};
-
-/// Writes one image described by `spec` (pixels of type spec.format, packed) to `path` atomically:
-/// the file is written under a temporary name in the same directory, then renamed over `path`.
-/// rename() within one file system is atomic, so readers see either the old file or the complete
-/// new one. The format is chosen from `path`'s extension, not the temporary name's.
+/// Writes one image described by `spec` (pixels of type spec.format, packed) to `path` atomically
+/// (core/atomic_file.h). The format is chosen from `path`'s extension, not the temporary name's.
 void writeAtomically(const std::string& path, const OIIO::ImageSpec& spec, const void* pixels) {
-    const fs::path parent = fs::path(path).parent_path();
-    if (!parent.empty()) {
-        std::error_code ec;
-        fs::create_directories(parent, ec);
-        if (ec) {
-            throw InputError(path + ": cannot create directory " + parent.string() + ": " +
-                             ec.message());
-        }
-    }
-
-    const std::string tmpPath = temporaryPath(path);
-    TemporaryFileGuard guard(tmpPath);  // Declared before `out`, so `out` is closed first.
-    TemporaryFileForSignal signalCleanup(tmpPath);  // a second Ctrl-C's immediate exit removes it too
-    {
+    writeFileAtomically(path, "file", [&](const std::string& tmpPath) {
         std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path);
         if (!out) {
             throw InputError(path + ": cannot write this image format: " + OIIO::geterror());
@@ -88,12 +46,7 @@ void writeAtomically(const std::string& path, const OIIO::ImageSpec& spec, const
         if (!out->write_image(spec.format, pixels)) fail("cannot write pixels");
         // close() flushes: a full disk is often only reported here.
         if (!out->close()) fail("cannot finish writing");
-    }
-
-    std::error_code ec;
-    fs::rename(tmpPath, path, ec);
-    if (ec) throw InputError(path + ": cannot replace file: " + ec.message());
-    guard.release();
+    });
 }
 
 void addMetadata(OIIO::ImageSpec& spec, const Metadata& metadata) {

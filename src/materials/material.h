@@ -1,9 +1,8 @@
 #pragma once
 /// \file material.h
-/// The four materials Tessera models and no more (DEVELOPERS.md: model what the scenes need):
-/// Lambertian, perfect mirror, smooth dielectric, GGX rough conductor. A material is a plain tagged
-/// struct: BSDF calls run once per bounce, so they dispatch with a switch, not a virtual call
-/// (STYLE.md practice 4).
+/// The four materials the scenes need and no more: Lambertian, perfect mirror, smooth dielectric,
+/// GGX rough conductor. A material is a plain tagged struct: BSDF calls run once per bounce, so they
+/// dispatch with a switch, not a virtual call (as pbrt-v4 dispatches its per-bounce types).
 #include <string>
 
 #include "core/math.h"

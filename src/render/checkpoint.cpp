@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <memory>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
-#include "render/interrupt.h"
 
 namespace tessera {
 namespace {
@@ -133,25 +133,7 @@ static_assert(sizeof(SplatSink::Entry) == 16, "checkpoint splat entries are 4-by
 
 void writeCheckpoint(const std::string& path, const CheckpointHeader& header, const Film& film,
                      const RenderState& state) {
-    const fs::path parent = fs::path(path).parent_path();
-    if (!parent.empty()) {
-        std::error_code ec;
-        fs::create_directories(parent, ec);
-        if (ec) throw InputError(path + ": cannot create directory " + parent.string() + ": " + ec.message());
-    }
-    const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-    // A second Ctrl-C exits at once from the signal handler: let it remove the temporary file.
-    TemporaryFileForSignal signalCleanup(tmp);
-    struct Remove {
-        const std::string* p;
-        ~Remove() {
-            if (p) {
-                std::error_code ignored;
-                fs::remove(*p, ignored);
-            }
-        }
-    } remove{&tmp};
-    {
+    writeFileAtomically(path, "checkpoint", [&](const std::string& tmp) {
         File f(std::fopen(tmp.c_str(), "wb"));
         if (!f) throw InputError(path + ": cannot write checkpoint: " + std::strerror(errno));
         Writer w(f.get(), path);
@@ -193,21 +175,14 @@ void writeCheckpoint(const std::string& path, const CheckpointHeader& header, co
             throw InputError(path + ": cannot write checkpoint: " + std::strerror(errno));
         FILE* raw = f.release();
         if (std::fclose(raw) != 0) throw InputError(path + ": cannot finish writing checkpoint: " + std::strerror(errno));
-    }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) throw InputError(path + ": cannot replace checkpoint: " + ec.message());
-    remove.p = nullptr;
+    });
 }
 
-RenderState readCheckpoint(const std::string& path, const CheckpointHeader& expected, Film& film) {
-    std::error_code ec;
-    uint64_t size = fs::file_size(path, ec);
-    if (ec) throw InputError(path + ": no checkpoint to resume (" + ec.message() + "); render with --checkpoint SEC first");
-    File f(std::fopen(path.c_str(), "rb"));
-    if (!f) throw InputError(path + ": cannot open checkpoint: " + std::strerror(errno));
-    Reader r(f.get(), path, size);
+namespace {
 
+/// Reads and checks the framing up to the payload (magic number, version, byte order, lengths) and
+/// verifies the CRC over the whole payload, leaving `f` at the payload's start. Returns the header text.
+std::string readFraming(Reader& r, FILE* f, const std::string& path, uint64_t size) {
     char magic[8];
     r.bytes(magic, sizeof magic, "magic number");
     if (std::memcmp(magic, kMagic, sizeof magic) != 0) throw InputError(path + ": not a Tessera checkpoint");
@@ -228,23 +203,27 @@ RenderState readCheckpoint(const std::string& path, const CheckpointHeader& expe
         throw InputError(path + ": checkpoint is truncated or has trailing bytes (" + std::to_string(size) + " bytes, expected " +
                          std::to_string(kFramingBytes + headerBytes + payload) + ")");
     {
-        long bodyStart = std::ftell(f.get());
+        long bodyStart = std::ftell(f);
         uLong crc = r.crc();
         std::vector<char> buf(1 << 20);
         uint64_t left = payload;
         while (left > 0) {
             size_t k = size_t(std::min<uint64_t>(left, buf.size()));
-            if (std::fread(buf.data(), 1, k, f.get()) != k) throw InputError(path + ": cannot read checkpoint payload");
+            if (std::fread(buf.data(), 1, k, f) != k) throw InputError(path + ": cannot read checkpoint payload");
             crc = crc32(crc, reinterpret_cast<const Bytef*>(buf.data()), uInt(k));
             left -= k;
         }
         uint32_t stored = 0;
-        if (std::fread(&stored, sizeof stored, 1, f.get()) != 1) throw InputError(path + ": checkpoint is truncated (no checksum)");
+        if (std::fread(&stored, sizeof stored, 1, f) != 1) throw InputError(path + ": checkpoint is truncated (no checksum)");
         if (uint32_t(crc) != stored) throw InputError(path + ": checkpoint is corrupt (CRC-32 mismatch)");
-        std::fseek(f.get(), bodyStart, SEEK_SET);
+        std::fseek(f, bodyStart, SEEK_SET);
     }
+    return text;
+}
 
-    // Settings: the first that differs is named with both values.
+/// The settings in the checkpoint's header must equal `expected`: the first that differs is named
+/// with both values.
+void checkSettings(const std::string& path, const std::string& text, const CheckpointHeader& expected) {
     CheckpointHeader found = parseHeader(text);
     for (const auto& [key, value] : expected) {
         auto it = std::find_if(found.begin(), found.end(), [&](const auto& kv) { return kv.first == key; });
@@ -253,7 +232,10 @@ RenderState readCheckpoint(const std::string& path, const CheckpointHeader& expe
             throw InputError(path + ": checkpoint does not match this render: " + key + " is '" + have +
                              "' in the checkpoint, '" + value + "' now");
     }
+}
 
+/// The scheduler's state (render/renderer.h) as writeCheckpoint stores it, for a film of `film`'s size.
+RenderState readState(Reader& r, const std::string& path, const Film& film) {
     uint32_t width = r.value<uint32_t>("resolution"), height = r.value<uint32_t>("resolution");
     if (int64_t(width) != film.width() || int64_t(height) != film.height())
         throw InputError(path + ": checkpoint film is " + std::to_string(width) + "x" + std::to_string(height) + ", this render " +
@@ -288,6 +270,22 @@ RenderState readCheckpoint(const std::string& path, const CheckpointHeader& expe
                 if (e.pixelIndex >= pixels) throw InputError(path + ": checkpoint is corrupt (splat outside the image)");
         }
     }
+    return s;
+}
+
+}  // namespace
+
+RenderState readCheckpoint(const std::string& path, const CheckpointHeader& expected, Film& film) {
+    std::error_code ec;
+    uint64_t size = fs::file_size(path, ec);
+    if (ec) throw InputError(path + ": no checkpoint to resume (" + ec.message() + "); render with --checkpoint SEC first");
+    File f(std::fopen(path.c_str(), "rb"));
+    if (!f) throw InputError(path + ": cannot open checkpoint: " + std::strerror(errno));
+    Reader r(f.get(), path, size);
+
+    std::string text = readFraming(r, f.get(), path, size);
+    checkSettings(path, text, expected);
+    RenderState s = readState(r, path, film);
     r.array(film.sumData(), "film sums");
     r.array(film.sumSqData(), "film sums of squares");
     r.array(film.splatData(), "film splats");

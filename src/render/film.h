@@ -15,6 +15,13 @@ class Film {
 public:
     Film(int width, int height);
 
+    /// Bytes a width x height film takes while rendering and writing out: sum, sum of squares and
+    /// splats in double per channel plus a sample count (the accumulation state), and one rgba()
+    /// image. Lets a caller refuse a resolution before allocating it.
+    static double memoryBytes(int width, int height) {
+        return double(width) * double(height) * (9.0 * sizeof(double) + sizeof(uint32_t) + 4 * sizeof(float));
+    }
+
     int width() const { return width_; }
     int height() const { return height_; }
 

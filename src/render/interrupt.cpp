@@ -3,19 +3,16 @@
 #include <signal.h>
 #include <unistd.h>
 
-#include <cstring>
+#include "core/atomic_file.h"
 
 namespace tessera {
 namespace {
 std::atomic<bool> gInterrupted{false};
 struct sigaction gOldInt, gOldTerm;
-// The temporary file being written, if any: a NUL-terminated path the handler may unlink.
-char gTemporaryPath[4096];
-std::atomic<bool> gHasTemporaryPath{false};
 
 extern "C" void onSignal(int) {
     if (gInterrupted.exchange(true)) {  // second signal: leave now (async-signal-safe calls only)
-        if (gHasTemporaryPath.load()) unlink(gTemporaryPath);
+        removeTemporaryFileForSignal();  // an output being written (core/atomic_file.h)
         _exit(130);
     }
     const char msg[] = "\ntessera: interrupted, finishing the current tiles and writing the image (again to quit at once)\n";
@@ -27,17 +24,6 @@ extern "C" void onSignal(int) {
 static_assert(std::atomic<bool>::is_always_lock_free, "the interrupt flag is set from a signal handler");
 
 std::atomic<bool>& interruptFlag() { return gInterrupted; }
-
-TemporaryFileForSignal::TemporaryFileForSignal(const std::string& path) {
-    if (path.size() >= sizeof gTemporaryPath || gHasTemporaryPath.load()) return;
-    std::memcpy(gTemporaryPath, path.c_str(), path.size() + 1);
-    gHasTemporaryPath.store(true);
-    registered_ = true;
-}
-
-TemporaryFileForSignal::~TemporaryFileForSignal() {
-    if (registered_) gHasTemporaryPath.store(false);
-}
 
 InterruptGuard::InterruptGuard() {
     struct sigaction sa {};

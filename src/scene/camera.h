@@ -51,8 +51,6 @@ public:
     bool sampleIncoming(const Vec3f& ref, Vec2f uLens, CameraSample& out) const;
     bool isPinhole() const { return !(desc_.apertureRadius > 0.f); }
     float lensArea() const { return isPinhole() ? 1.f : kPi * desc_.apertureRadius * desc_.apertureRadius; }
-    /// Area of the image rectangle at distance 1 in front of the eye.
-    float imagePlaneArea() const { return imagePlaneArea_; }
 
     Vec3f position() const { return eye_; }
     Vec3f forward() const { return forward_; }
@@ -66,7 +64,7 @@ private:
     int width_, height_;
     Mat4d viewProj_, invViewProj_;
     Vec3f eye_, forward_, right_, up_;
-    float imagePlaneArea_ = 0.f;
+    float imagePlaneArea_ = 0.f;  ///< area of the image rectangle at distance 1 in front of the eye
 };
 
 }  // namespace tessera

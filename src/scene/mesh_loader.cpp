@@ -11,10 +11,10 @@
 #include <string_view>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "core/error.h"
-#include "scene/gltf_loader.h"
 
 namespace tessera {
 namespace {
@@ -120,11 +120,15 @@ public:
 
     double read(PlyType t) {
         double v = format_ == 0 ? readAscii() : readBinary(t);
-        if (isIntegerType(t) && format_ == 0 && v != std::floor(v)) fail("'" + num(v) + "' is not an integer");
+        if (isIntegerType(t) && format_ == 0 && v != std::floor(v)) failNotInteger(v);
         return v;
     }
 
 private:
+    // Out of line: inlined into every reader, the message's concatenation trips GCC 12's -Wrestrict
+    // false positive (GCC bug 105329).
+    [[noreturn]] __attribute__((noinline)) void failNotInteger(double v) const { fail("'" + num(v) + "' is not an integer"); }
+
     double readBinary(PlyType t) {
         size_t size = plyTypeSize(t);
         if (size > bytesLeft()) fail("file ends early (truncated)");
@@ -170,13 +174,6 @@ private:
 
 void addPolygon(TriangleMesh& mesh, const std::vector<uint32_t>& poly) {
     for (size_t k = 2; k < poly.size(); ++k) mesh.triangles.emplace_back(poly[0], poly[k - 1], poly[k]);
-}
-
-std::string lowerExtension(const std::string& path) {
-    std::string p = path;
-    std::transform(p.begin(), p.end(), p.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (p.size() > 3 && p.ends_with(".gz")) p.resize(p.size() - 3);
-    return std::filesystem::path(p).extension().string();
 }
 
 /// A non-negative integer header field ("element vertex 8"); anything else is an error.
@@ -256,15 +253,12 @@ PlyHeader parsePlyHeader(const std::string& path, const std::string& data) {
     return h;
 }
 
-}  // namespace
-
-TriangleMesh loadPlyMesh(const std::string& path, const MeshLoadOptions& options) {
-    std::string data = readMaybeGzipped(path, options.maxBytes);
-    PlyHeader header = parsePlyHeader(path, data);
-
-    // Allocation bombs: a declared count must fit both the bytes the file has and the memory limit.
-    uint64_t bodyBytes = data.size() - header.bodyStart, minimumBody = 0, vertexCount = 0;
-    bool vertexCountKnown = false;
+/// Allocation bombs: a declared count must fit both the bytes the file has and the memory limit.
+/// Returns the `vertex` element's count when the file declares one.
+std::optional<uint64_t> checkDeclaredCounts(const std::string& path, const PlyHeader& header, uint64_t bodyBytes,
+                                            uint64_t maxBytes) {
+    uint64_t minimumBody = 0;
+    std::optional<uint64_t> vertexCount;
     for (const PlyElement& e : header.elements) {
         std::string where = "element " + e.name;
         uint64_t row = minimumRowBytes(e, header.format);
@@ -275,76 +269,97 @@ TriangleMesh loadPlyMesh(const std::string& path, const MeshLoadOptions& options
                                  std::to_string((bodyBytes - std::min(bodyBytes, minimumBody)) / row) + " (truncated file or bad count)");
         minimumBody += e.count * row;
         uint64_t perRow = e.name == "vertex" ? sizeof(Vec3f) : e.name == "face" ? sizeof(glm::uvec3) : 0;
-        if (perRow > 0 && e.count > options.maxBytes / perRow)
-            throw SceneError(path, where, std::to_string(e.count) + " rows need more than the memory limit of " + gib(options.maxBytes));
-        if (e.name == "vertex") {
-            vertexCount = e.count;
-            vertexCountKnown = true;
-        }
+        if (perRow > 0 && e.count > maxBytes / perRow)
+            throw SceneError(path, where, std::to_string(e.count) + " rows need more than the memory limit of " + gib(maxBytes));
+        if (e.name == "vertex") vertexCount = e.count;
     }
+    return vertexCount;
+}
+
+/// Reads one list property of the current row. When `indices`, its items are a face's vertex
+/// indices: checked against `vertexCount` and stored in `poly`. Returns the list's length.
+size_t readPlyList(PlyReader& reader, const PlyProperty& p, bool indices, std::optional<uint64_t> vertexCount,
+                   std::vector<uint32_t>& poly) {
+    double count = reader.read(p.countType);
+    if (count < 0) reader.fail("negative list length " + num(count));
+    // Every item takes at least one byte: a count beyond the data left is a lie.
+    if (count > double(reader.bytesLeft())) reader.fail("list length " + num(count) + " exceeds the data left");
+    size_t k = size_t(count);
+    poly.clear();
+    for (size_t j = 0; j < k; ++j) {
+        double v = reader.read(p.type);
+        if (!indices) continue;
+        if (!(v >= 0) || v != std::floor(v)) reader.fail("vertex index " + num(v) + " is not a non-negative integer");
+        // Compared as doubles and printed with num(): converting an out-of-range double
+        // to an integer is undefined behaviour (found by tools/fuzz.sh).
+        if ((vertexCount && v >= double(*vertexCount)) || v > double(0xfffffffeu))
+            reader.fail("vertex index " + num(v) + " out of range (the file has " + std::to_string(vertexCount.value_or(0)) +
+                        " vertices)");
+        poly.push_back(uint32_t(v));
+    }
+    return k;
+}
+
+/// Reads every row of element `e`: vertex positions and face index lists go into `mesh`, other
+/// elements and properties are read past.
+void readPlyElement(const std::string& path, PlyReader& reader, const PlyElement& e, std::optional<uint64_t> vertexCount,
+                    TriangleMesh& mesh) {
+    bool isVertex = e.name == "vertex", isFace = e.name == "face";
+    int xi = -1, yi = -1, zi = -1;
+    for (int i = 0; i < int(e.properties.size()); ++i) {
+        if (e.properties[i].name == "x") xi = i;
+        if (e.properties[i].name == "y") yi = i;
+        if (e.properties[i].name == "z") zi = i;
+    }
+    if (isVertex && (xi < 0 || yi < 0 || zi < 0)) throw SceneError(path, "element vertex", "needs properties x, y and z");
+    if (isVertex && (e.properties[xi].isList || e.properties[yi].isList || e.properties[zi].isList))
+        throw SceneError(path, "element vertex", "x, y and z must not be lists");
+    if (isVertex) mesh.positions.reserve(size_t(e.count));
+    if (isFace) mesh.triangles.reserve(size_t(e.count));
+    std::vector<uint32_t> poly;
+    for (uint64_t n = 0; n < e.count; ++n) {
+        reader.setRow(e.name, n);
+        Vec3f pos(0.f);
+        bool faceDone = false;
+        for (int i = 0; i < int(e.properties.size()); ++i) {
+            const PlyProperty& p = e.properties[i];
+            if (p.isList) {
+                bool indices = isFace && !faceDone && (p.name == "vertex_indices" || p.name == "vertex_index");
+                size_t k = readPlyList(reader, p, indices, vertexCount, poly);
+                if (indices) {
+                    if (k < 3) reader.fail("face with " + std::to_string(k) + " vertices (at least 3 needed)");
+                    addPolygon(mesh, poly);
+                    faceDone = true;
+                }
+            } else {
+                double v = reader.read(p.type);
+                if (isVertex && (i == xi || i == yi || i == zi)) {
+                    // Checked before the conversion: a double beyond float range makes float(v) undefined.
+                    if (!(std::abs(v) <= double(std::numeric_limits<float>::max())))
+                        reader.fail("non-finite coordinate " + p.name + " = " + num(v) + (std::isfinite(v) ? " (beyond float range)" : ""));
+                    (i == xi ? pos.x : i == yi ? pos.y : pos.z) = float(v);
+                }
+            }
+        }
+        if (isVertex) mesh.positions.push_back(pos);
+    }
+}
+
+}  // namespace
+
+TriangleMesh loadPlyMesh(const std::string& path, const MeshLoadOptions& options) {
+    std::string data = readMaybeGzipped(path, options.maxBytes);
+    PlyHeader header = parsePlyHeader(path, data);
+    std::optional<uint64_t> vertexCount = checkDeclaredCounts(path, header, data.size() - header.bodyStart, options.maxBytes);
 
     TriangleMesh mesh;
     mesh.name = std::filesystem::path(path).filename().string();
     PlyReader reader(path, data, header.bodyStart, header.format);
-    std::vector<uint32_t> poly;
     bool sawVertex = false, sawFace = false;
     for (const PlyElement& e : header.elements) {
-        bool isVertex = e.name == "vertex", isFace = e.name == "face";
-        int xi = -1, yi = -1, zi = -1;
-        for (int i = 0; i < int(e.properties.size()); ++i) {
-            if (e.properties[i].name == "x") xi = i;
-            if (e.properties[i].name == "y") yi = i;
-            if (e.properties[i].name == "z") zi = i;
-        }
-        if (isVertex && (xi < 0 || yi < 0 || zi < 0)) throw SceneError(path, "element vertex", "needs properties x, y and z");
-        if (isVertex && (e.properties[xi].isList || e.properties[yi].isList || e.properties[zi].isList))
-            throw SceneError(path, "element vertex", "x, y and z must not be lists");
-        sawVertex |= isVertex;
-        sawFace |= isFace;
-        if (isVertex) mesh.positions.reserve(size_t(e.count));
-        if (isFace) mesh.triangles.reserve(size_t(e.count));
-        for (uint64_t n = 0; n < e.count; ++n) {
-            reader.setRow(e.name, n);
-            Vec3f pos(0.f);
-            bool faceDone = false;
-            for (int i = 0; i < int(e.properties.size()); ++i) {
-                const PlyProperty& p = e.properties[i];
-                if (p.isList) {
-                    double count = reader.read(p.countType);
-                    if (count < 0) reader.fail("negative list length " + num(count));
-                    // Every item takes at least one byte: a count beyond the data left is a lie.
-                    if (count > double(reader.bytesLeft())) reader.fail("list length " + num(count) + " exceeds the data left");
-                    size_t k = size_t(count);
-                    bool indices = isFace && !faceDone && (p.name == "vertex_indices" || p.name == "vertex_index");
-                    poly.clear();
-                    for (size_t j = 0; j < k; ++j) {
-                        double v = reader.read(p.type);
-                        if (!indices) continue;
-                        if (!(v >= 0) || v != std::floor(v)) reader.fail("vertex index " + num(v) + " is not a non-negative integer");
-                        // Compared as doubles and printed with num(): converting an out-of-range double
-                        // to an integer is undefined behaviour (found by tools/fuzz.sh).
-                        if ((vertexCountKnown && v >= double(vertexCount)) || v > double(0xfffffffeu))
-                            reader.fail("vertex index " + num(v) + " out of range (the file has " +
-                                        std::to_string(vertexCount) + " vertices)");
-                        poly.push_back(uint32_t(v));
-                    }
-                    if (indices) {
-                        if (k < 3) reader.fail("face with " + std::to_string(k) + " vertices (at least 3 needed)");
-                        addPolygon(mesh, poly);
-                        faceDone = true;
-                    }
-                } else {
-                    double v = reader.read(p.type);
-                    if (isVertex && (i == xi || i == yi || i == zi)) {
-                        // Checked before the conversion: a double beyond float range makes float(v) undefined.
-                        if (!(std::abs(v) <= double(std::numeric_limits<float>::max())))
-                            reader.fail("non-finite coordinate " + p.name + " = " + num(v) + (std::isfinite(v) ? " (beyond float range)" : ""));
-                        (i == xi ? pos.x : i == yi ? pos.y : pos.z) = float(v);
-                    }
-                }
-            }
-            if (isVertex) mesh.positions.push_back(pos);
-        }
+        sawVertex |= e.name == "vertex";
+        sawFace |= e.name == "face";
+        readPlyElement(path, reader, e, vertexCount, mesh);
     }
     if (!sawVertex) throw SceneError(path, "header", "no 'vertex' element");
     if (!sawFace) throw SceneError(path, "header", "no 'face' element (point clouds cannot be traced)");
@@ -413,25 +428,6 @@ TriangleMesh loadObjMesh(const std::string& path, const MeshLoadOptions& options
                                  std::to_string(mesh.positions.size()) + " vertices)");
     if (mesh.triangles.empty()) throw SceneError(path, "", "no faces");
     return mesh;
-}
-
-SceneGeometry loadGeometryFile(const std::string& path, std::optional<CameraDesc>& camera,
-                               std::vector<std::string>& warnings, const MeshLoadOptions& options) {
-    std::string ext = lowerExtension(path);
-    SceneGeometry g;
-    if (ext == ".gltf" || ext == ".glb") {
-        Scene scene = loadGltfScene(path, warnings);
-        camera = scene.camera;
-        g.meshes = std::move(scene.geometry.meshes);
-        g.spheres = std::move(scene.geometry.spheres);
-    } else if (ext == ".ply") {
-        g.meshes.push_back(loadPlyMesh(path, options));
-    } else if (ext == ".obj") {
-        g.meshes.push_back(loadObjMesh(path, options));
-    } else {
-        throw InputError(path + ": unknown file type (expected .gltf, .glb, .ply, .ply.gz or .obj)");
-    }
-    return g;
 }
 
 }  // namespace tessera

@@ -2,13 +2,12 @@
 /// \file mesh_loader.h
 /// Loads bare triangle meshes for the acceleration-structure tools: PLY (ASCII, binary little and
 /// big endian; gzip-compressed too) and Wavefront OBJ (positions and faces only). Polygons are
-/// triangulated as fans. Also a front door that takes any of these or a glTF scene.
-#include <optional>
+/// triangulated as fans. glTF scenes name such meshes too (TESSERA_asset_mesh); scene/scene_loader.h
+/// is the front door that takes any of these files or a glTF scene.
 #include <string>
 #include <vector>
 
 #include "geometry/shapes.h"
-#include "scene/camera.h"
 
 namespace tessera {
 
@@ -29,10 +28,5 @@ TriangleMesh loadPlyMesh(const std::string& path, const MeshLoadOptions& options
 /// Throws SceneError "FILE: line L: PROBLEM" on a malformed record, a non-finite coordinate or an
 /// index out of range.
 TriangleMesh loadObjMesh(const std::string& path, const MeshLoadOptions& options = {});
-
-/// Geometry of a glTF scene (.gltf/.glb, with its camera when it has one), PLY or OBJ file, chosen by
-/// extension. Non-fatal problems go to `warnings`.
-SceneGeometry loadGeometryFile(const std::string& path, std::optional<CameraDesc>& camera,
-                               std::vector<std::string>& warnings, const MeshLoadOptions& options = {});
 
 }  // namespace tessera

@@ -1,5 +1,5 @@
 #pragma once
-/// \file bsdf_path_tracer.h
+/// \file pt.h
 /// `pt`: unidirectional path tracing with BSDF sampling only. Emission is added whenever a path
 /// hits an emitter, with weight 1. The simplest unbiased estimator, and the baseline the others
 /// are compared with; it cannot see point lights (a ray never hits a delta light).
@@ -7,7 +7,7 @@
 
 namespace tessera {
 
-class BsdfPathTracer final : public Integrator {
+class PtIntegrator final : public Integrator {
 public:
     std::string_view name() const override { return "pt"; }
     Rgb sample(const RenderContext& ctx, Vec2i pixel, Vec2f raster, Sampler& sampler, SplatSink& splats) const override;

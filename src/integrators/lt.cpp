@@ -1,4 +1,4 @@
-#include "integrators/light_tracer.h"
+#include "integrators/lt.h"
 
 #include "integrators/bdpt_connect.h"
 #include "integrators/sample_trace.h"
@@ -14,7 +14,7 @@ namespace tessera {
 // traces one light path, so a pixel receives (W·H·spp) paths whose We is normalised over the whole
 // film: We·(W·H) per pixel, divided by W·H·spp paths = 1/spp per splat. Paths whose camera-side
 // vertex is delta (seen through a mirror or glass) cannot be connected and are missed.
-Rgb LightTracer::sample(const RenderContext& ctx, Vec2i, Vec2f, Sampler& sampler, SplatSink& splats) const {
+Rgb LtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f, Sampler& sampler, SplatSink& splats) const {
     thread_local std::vector<PathVertex> light;
     int maxVertices = ctx.maxDepth < 0 ? -1 : ctx.maxDepth + 1;
     traceLightSubpath(ctx, sampler, maxVertices, light);

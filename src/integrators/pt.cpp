@@ -1,5 +1,6 @@
-#include "integrators/bsdf_path_tracer.h"
+#include "integrators/pt.h"
 
+#include "integrators/russian_roulette.h"
 #include "integrators/sample_trace.h"
 #include "materials/surface_bsdf.h"
 
@@ -8,12 +9,12 @@ namespace tessera {
 // Why this estimator is unbiased: the path throughput β is the product of f·|cos θ|/pdf of the
 // sampled directions, the Monte Carlo estimator of each term of the path integral (Veach 1997,
 // eq. 8.19), and every path that ends on an emitter contributes β·Le exactly once. Russian
-// roulette divides by the survival probability (Arvo & Kirk 1990).
-Rgb BsdfPathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& sampler, SplatSink&) const {
+// roulette divides by the survival probability (integrators/russian_roulette.h).
+Rgb PtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& sampler, SplatSink&) const {
     const Scene& scene = ctx.scene;
     Ray ray = ctx.camera.generateRay(raster, sampler.get2D());
     Rgb L(0.f), beta(1.f);
-    float rrScale = 1.f;
+    float rrScale = 1.f;  // what Russian roulette looks at (integrators/russian_roulette.h)
     for (int depth = 0;; ++depth) {
         Hit hit;
         // Camera rays follow their neighbours (tiles in pixel order): the coherent kernel.
@@ -40,12 +41,7 @@ Rgb BsdfPathTracer::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
         beta *= bs.weight;
         rrScale *= maxComponent(bs.weight) * bs.eta * bs.eta;
         if (isBlack(beta)) break;
-        if (depth >= 2 && rrScale < 1.f) {
-            if (trace) [[unlikely]] trace->add("rrSurvival", rrScale);
-            if (sampler.get1D() >= rrScale) break;
-            beta /= rrScale;
-            rrScale = 1.f;
-        }
+        if (depth >= kRouletteMinDepth && !survivesRoulette(rrScale, beta, sampler, trace)) break;
         ray = spawnRay(si.p, si.ng, bs.wiWorld);
     }
     return L;

@@ -1,5 +1,5 @@
 #pragma once
-/// \file light_tracer.h
+/// \file lt.h
 /// `lt`: light tracing (particle tracing). Each camera sample traces one light sub-path and connects
 /// every vertex of it, the light point included, to a point on the lens; the contributions are
 /// splatted to the pixels they land on (BDPT's t = 1 strategies alone, all with weight 1).
@@ -8,7 +8,7 @@
 
 namespace tessera {
 
-class LightTracer final : public Integrator {
+class LtIntegrator final : public Integrator {
 public:
     std::string_view name() const override { return "lt"; }
     Rgb sample(const RenderContext& ctx, Vec2i pixel, Vec2f raster, Sampler& sampler, SplatSink& splats) const override;

@@ -1,0 +1,133 @@
+#include "integrators/ptnee.h"
+
+#include "core/sampling.h"
+#include "integrators/next_event.h"
+#include "integrators/russian_roulette.h"
+#include "integrators/sample_trace.h"
+#include "materials/surface_bsdf.h"
+
+namespace tessera {
+
+namespace {
+
+/// Emission found by BSDF sampling at `si`, weighted against the light-sampling strategy that could
+/// have produced the same path (`prevPdfW`: the BSDF density that produced the ray from `prevP`).
+/// Emission reached through a delta bounce or seen directly from the camera has weight 1.
+void addEmission(const RenderContext& ctx, const SurfaceInteraction& si, const Vec3f& wo, const Rgb& beta, bool deltaBounce,
+                 float prevPdfW, const Vec3f& prevP, Rgb& L) {
+    const LightSet& lights = ctx.scene.lights();
+    Rgb Le = lights.emitted(si.lightIndex, si.ng, wo);
+    if (isBlack(Le)) return;
+    SampleTrace* trace = ctx.trace;
+    if (deltaBounce) {
+        L += beta * Le;
+        if (trace) [[unlikely]] {
+            trace->add("Le", Le);
+            trace->add("emissionMisW", 1.f);
+            trace->add("emissionContribution", beta * Le);
+        }
+        return;
+    }
+    float pdfLightW = lights.pdfW(si.lightIndex, prevP, si.p, si.ng);
+    L += beta * Le * powerHeuristic(prevPdfW, pdfLightW);
+    if (trace) [[unlikely]] {
+        trace->add("Le", Le);
+        trace->add("emissionPdfLightW", pdfLightW);
+        trace->add("emissionMisW", powerHeuristic(prevPdfW, pdfLightW));
+        trace->add("emissionContribution", beta * Le * powerHeuristic(prevPdfW, pdfLightW));
+    }
+}
+
+/// Next-event estimation at a non-delta vertex: one light sample (integrators/next_event.h),
+/// weighted against BSDF sampling, added to L.
+void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, const SurfaceBsdf& bsdf, const Vec3f& wo,
+                    const Rgb& beta, Sampler& sampler, Rgb& L) {
+    NextEventSample ne;
+    if (!sampleNextEvent(ctx.scene.lights(), si.p, si.ng, wo, sampler, ne)) return;
+    const LightSample& ls = ne.light;
+    Vec3f toLight = ls.p - ne.pRef;
+    float dist = glm::length(toLight);
+    Vec3f wi = toLight / dist;
+    SampleTrace* trace = ctx.trace;
+    if (trace) [[unlikely]] {
+        // Recomputing the BSDF density draws no random numbers: the path is unchanged.
+        trace->add("lightP", ls.p);
+        trace->add("lightPdfW", ls.pdfW);
+        if (!ls.isDelta) trace->add("lightBsdfPdfW", bsdf.pdfFwdW(wo, wi));
+    }
+    // Reflection-only BSDFs: wi must leave on wo's side of the *geometric* surface, or a shading
+    // normal would let light through (Veach 1997, §5.3).
+    if (!(dist > 0.f && glm::dot(wi, si.ng) * glm::dot(wo, si.ng) > 0.f)) return;
+    Rgb f = bsdf.eval(wo, wi, TransportMode::Radiance) * std::abs(glm::dot(wi, bsdf.ns()));
+    if (isBlack(f) || !lightVisible(ctx.accel, si.p, si.ng, ls)) return;
+    // A point light cannot be hit by BSDF sampling: light sampling is its only strategy.
+    float w = ls.isDelta ? 1.f : powerHeuristic(ls.pdfW, bsdf.pdfFwdW(wo, wi));
+    L += beta * f * ls.Le * (w / ls.pdfW);
+    if (trace) [[unlikely]] {
+        trace->add("lightMisW", w);
+        trace->add("lightContribution", beta * f * ls.Le * (w / ls.pdfW));
+    }
+}
+
+}  // namespace
+
+// Why this estimator is unbiased (writeup, "Light transport and why each estimator is unbiased"):
+//  * Each path vertex contributes emission through two strategies: a light sample (NEE) and a BSDF
+//    sample that happens to hit the emitter. Their MIS weights (power heuristic, Veach 1997 eq. 9.13)
+//    sum to 1 for every light path both can produce, so the combination is unbiased (Veach eq. 9.9
+//    with the weights' partition of unity, Theorem 9.2). Emission reached through a delta bounce
+//    (mirror, glass) or seen directly from the camera can only come from BSDF sampling: weight 1.
+//  * Throughput β is the product of f·|cos|/pdf of the sampled directions: the standard
+//    Monte Carlo estimator of the path-integral terms (Veach 1997 eq. 8.19).
+//  * Russian roulette divides β by the survival probability (integrators/russian_roulette.h).
+Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& sampler, SplatSink&) const {
+    const Scene& scene = ctx.scene;
+    Ray ray = ctx.camera.generateRay(raster, sampler.get2D());
+
+    Rgb L(0.f), beta(1.f);
+    float etaScale = 1.f;        // product of η² over refractions: Russian roulette looks at β·etaScale
+    bool deltaBounce = true;     // the previous vertex was the camera or a delta BSDF
+    float prevPdfW = 0.f;        // solid-angle density of the BSDF sample that produced `ray`
+    Vec3f prevP = ray.o;
+
+    for (int depth = 0;; ++depth) {
+        Hit hit;
+        // Camera rays follow their neighbours (tiles in pixel order): the coherent kernel.
+        if (!(depth == 0 ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) break;
+        SurfaceInteraction si = scene.interaction(ray, hit);
+        Vec3f wo = -glm::normalize(ray.d);
+        SampleTrace* trace = ctx.trace;
+        if (trace) [[unlikely]] {
+            trace->vertex(depth, si.p, si.ng, si.materialId, beta);
+        }
+        if (si.lightIndex != kInvalidId) addEmission(ctx, si, wo, beta, deltaBounce, prevPdfW, prevP, L);
+        if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;
+
+        SurfaceBsdf bsdf(scene.materials[si.materialId], si.ns, si.ng);
+        if (!bsdf.isDelta()) addLightSample(ctx, si, bsdf, wo, beta, sampler, L);
+
+        // Continue the path by BSDF sampling.
+        SurfaceBsdfSample bs;
+        float uLobe = sampler.get1D();
+        Vec2f uDir = sampler.get2D();
+        if (!bsdf.sample(wo, uLobe, uDir, TransportMode::Radiance, bs)) {
+            if (trace) [[unlikely]] trace->add("L", L);
+            break;
+        }
+        if (trace) [[unlikely]] {
+            trace->bsdfSample(bs.wiWorld, bs.pdfFwdW, bs.isDelta, bs.weight);
+            trace->add("L", L);
+        }
+        beta *= bs.weight;
+        etaScale *= bs.eta * bs.eta;
+        deltaBounce = bs.isDelta;
+        prevPdfW = bs.pdfFwdW;
+        if (isBlack(beta)) break;
+        if (depth >= kRouletteMinDepth && !survivesThroughputRoulette(maxComponent(beta) * etaScale, beta, sampler, trace)) break;
+        ray = spawnRay(si.p, si.ng, bs.wiWorld);
+        prevP = ray.o;
+    }
+    return L;
+}
+
+}  // namespace tessera
