@@ -58,10 +58,11 @@ void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, cons
     // Reflection-only BSDFs: wi must leave on wo's side of the *geometric* surface, or a shading
     // normal would let light through (Veach 1997, §5.3).
     if (!(dist > 0.f && glm::dot(wi, si.ng) * glm::dot(wo, si.ng) > 0.f)) return;
-    Rgb f = bsdf.eval(wo, wi, TransportMode::Radiance) * std::abs(glm::dot(wi, bsdf.ns()));
+    float bsdfPdfW;
+    Rgb f = bsdf.evalWithPdf(wo, wi, TransportMode::Radiance, bsdfPdfW) * std::abs(glm::dot(wi, bsdf.ns()));
     if (isBlack(f) || !lightVisible(ctx.accel, si.p, si.ng, ls)) return;
     // A point light cannot be hit by BSDF sampling: light sampling is its only strategy.
-    float w = ls.isDelta ? 1.f : powerHeuristic(ls.pdfW, bsdf.pdfFwdW(wo, wi));
+    float w = ls.isDelta ? 1.f : powerHeuristic(ls.pdfW, bsdfPdfW);
     L += beta * f * ls.Le * (w / ls.pdfW);
     if (trace) [[unlikely]] {
         trace->add("lightMisW", w);

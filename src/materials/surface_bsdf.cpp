@@ -30,6 +30,14 @@ float SurfaceBsdf::pdfFwdW(const Vec3f& wo, const Vec3f& wi) const {
     return pdfBsdfW(mat_, frame_.toLocal(wo), frame_.toLocal(wi));
 }
 
+Rgb SurfaceBsdf::evalWithPdf(const Vec3f& wo, const Vec3f& wi, TransportMode mode, float& pdfFwdW) const {
+    pdfFwdW = 0.f;
+    if (isDelta() || !sidesAgree(wo, wi)) return Rgb(0.f);
+    Vec3f woL = frame_.toLocal(wo), wiL = frame_.toLocal(wi);
+    pdfFwdW = pdfBsdfW(mat_, woL, wiL);
+    return evalBsdf(mat_, woL, wiL, mode) * shadingCorrection(wo, wi, mode);
+}
+
 bool SurfaceBsdf::sample(const Vec3f& wo, float uLobe, Vec2f u, TransportMode mode, SurfaceBsdfSample& out) const {
     Vec3f woL = frame_.toLocal(wo);
     BsdfSample bs;
@@ -40,14 +48,6 @@ bool SurfaceBsdf::sample(const Vec3f& wo, float uLobe, Vec2f u, TransportMode mo
     out.isDelta = bs.isDelta;
     out.eta = bs.eta;
     out.pdfFwdW = bs.pdfW;
-    if (bs.isDelta) {
-        // The reverse event picks the same lobe (reflection stays reflection, refraction refraction)
-        // with the lobe probability seen from wi; MIS remaps delta densities anyway, so any positive
-        // value that cancels in pdfRev/pdfFwd is fine: use the same discrete probability.
-        out.pdfRevW = bs.pdfW;
-    } else {
-        out.pdfRevW = pdfBsdfW(mat_, bs.wiLocal, woL);
-    }
     out.weight = bs.weight * shadingCorrection(wo, wi, mode);
     return true;
 }

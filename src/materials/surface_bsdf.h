@@ -2,8 +2,8 @@
 /// \file surface_bsdf.h
 /// A material bound to one surface point: the world-space BSDF interface that bidirectional methods
 /// need. It adds to bsdf.h (local frame, radiance only)
-///  * densities in both directions: pdfFwdW = p(wi | wo) and pdfRevW = p(wo | wi), the reverse one
-///    being what a sub-path walking the other way would have used (Veach 1997, §10.2);
+///  * the density pdfFwdW = p(wi | wo); with the arguments swapped it is the reverse density
+///    p(wo | wi) that a sub-path walking the other way would have used (Veach 1997, §10.2);
 ///  * the adjoint BSDF for importance transport with shading normals (Veach 1997, §5.3, eq. 5.17 ff.):
 ///    f*(wo→wi) carries the factor |wo·ns| |wi·ng| / (|wo·ng| |wi·ns|), which makes light sub-paths
 ///    and camera sub-paths agree (missing in pbrt-v3 until PR #94);
@@ -21,7 +21,6 @@ struct SurfaceBsdfSample {
     Vec3f wiWorld{0.f};
     Rgb weight{0.f};      ///< f · |wi·ns| / pdfFwdW, shading correction included in importance mode
     float pdfFwdW = 0.f;  ///< density of wi given wo (for delta lobes: the lobe's discrete probability)
-    float pdfRevW = 0.f;  ///< density of wo given wi (same convention)
     bool isDelta = false;
     float eta = 1.f;      ///< η_t/η_i of a refraction, 1 otherwise
 };
@@ -32,15 +31,15 @@ public:
 
     bool isDelta() const { return isDeltaMaterial(mat_); }
     const Vec3f& ns() const { return frame_.n; }
-    const Vec3f& ng() const { return ng_; }
 
     /// f(wo, wi) for radiance; the adjoint f*(wo, wi) with the shading-normal correction for
     /// importance. Zero for delta materials and for shading/geometric side mismatches.
     Rgb eval(const Vec3f& woWorld, const Vec3f& wiWorld, TransportMode mode) const;
     /// Solid-angle density of sampling wi given wo (0 for delta materials).
     float pdfFwdW(const Vec3f& woWorld, const Vec3f& wiWorld) const;
-    /// Solid-angle density of sampling wo given wi: the pdf a sub-path walking the other way uses.
-    float pdfRevW(const Vec3f& woWorld, const Vec3f& wiWorld) const { return pdfFwdW(wiWorld, woWorld); }
+    /// eval and pdfFwdW together, with one change of frame and one side test: what light sampling
+    /// needs to weight its sample against BSDF sampling.
+    Rgb evalWithPdf(const Vec3f& woWorld, const Vec3f& wiWorld, TransportMode mode, float& pdfFwdW) const;
     /// Samples wi given wo. False when no direction is produced or it violates the side rule.
     bool sample(const Vec3f& woWorld, float uLobe, Vec2f u, TransportMode mode, SurfaceBsdfSample& out) const;
 
