@@ -17,15 +17,9 @@ using namespace tessera;
 namespace {
 
 std::vector<float> renderWith(const Scene& scene, const std::string& accelName, const std::string& integratorName) {
-    auto accel = createAccel(accelName, scene.geometry);
-    auto integrator = createIntegrator(integratorName);
-    Camera camera(*scene.camera, 64, 48);
-    RenderContext ctx{scene, *accel, camera, -1};
-    Film film(64, 48);
-    RenderOptions opt{.spp = 8, .threads = 2, .seed = 11};
-    RenderStats stats = renderImage(ctx, *integrator, film, opt);
-    EXPECT_EQ(stats.nonFiniteDropped, 0u) << accelName;
-    return film.rgba();
+    test::TestRender r = test::renderScene(scene, integratorName, 64, 48, RenderOptions{.spp = 8, .threads = 2, .seed = 11}, accelName);
+    EXPECT_EQ(r.stats.nonFiniteDropped, 0u) << accelName;
+    return r.film.rgba();
 }
 
 struct ImageDifference {

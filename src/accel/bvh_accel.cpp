@@ -2,6 +2,7 @@
 /// Building the BVH: the binary SAH tree (bvh_builder.h, or bvh_spatial.h with spatial splits)
 /// collapsed into 8-wide nodes with leaf blocks of four triangles; and the tree's invariant check.
 /// The traversal kernels are in bvh_traversal.cpp.
+#include "core/fnv1a.h"
 #include "accel/bvh_accel.h"
 
 #include <tbb/task_arena.h>
@@ -214,14 +215,10 @@ size_t BvhAccel::referenceCount() const {
 }
 
 uint64_t BvhAccel::structureHash() const {
-    uint64_t h = 0xcbf29ce484222325ULL;
-    auto add = [&](const void* data, size_t bytes) {
-        const auto* p = static_cast<const unsigned char*>(data);
-        for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 0x100000001b3ULL;
-    };
-    add(nodes_.data(), nodes_.size() * sizeof(Node8));
-    add(triangles_.data(), triangles_.size() * sizeof(Triangle4));
-    add(mixedPrims_.data(), mixedPrims_.size() * sizeof(PrimRef));
+    uint64_t h = kFnv1a64Offset;
+    h = fnv1a64(nodes_.data(), nodes_.size() * sizeof(Node8), h);
+    h = fnv1a64(triangles_.data(), triangles_.size() * sizeof(Triangle4), h);
+    h = fnv1a64(mixedPrims_.data(), mixedPrims_.size() * sizeof(PrimRef), h);
     return h;
 }
 

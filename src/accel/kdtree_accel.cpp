@@ -2,6 +2,7 @@
 /// Building the k-d tree: the binary SAH tree (kdtree_builder.h), its leaves turned into blocks of
 /// eight triangles, the tree collapsed into wide nodes (kdtree_wide.h); and the tree's invariant
 /// check. The traversal kernels are in kdtree_traversal.cpp.
+#include "core/fnv1a.h"
 #include "accel/kdtree_accel.h"
 
 #include <algorithm>
@@ -96,17 +97,13 @@ uint32_t KdTreeAccel::makeLeaf(const uint32_t* order, uint32_t count) {
 }
 
 uint64_t KdTreeAccel::structureHash() const {
-    uint64_t h = 0xcbf29ce484222325ULL;
-    auto add = [&](const void* data, size_t bytes) {
-        const auto* p = static_cast<const unsigned char*>(data);
-        for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 0x100000001b3ULL;
-    };
-    add(nodes_.data(), nodes_.size() * sizeof(KdNode));
-    add(wide_.data(), wide_.size() * sizeof(KdWideNode));
-    add(leafTable_.data(), leafTable_.size() * sizeof(KdLeafRecord));
-    add(triangles_.data(), triangles_.size() * sizeof(TriangleBlock));
-    add(blockIds_.data(), blockIds_.size() * sizeof(PrimRef));
-    add(mixedPrims_.data(), mixedPrims_.size() * sizeof(PrimRef));
+    uint64_t h = kFnv1a64Offset;
+    h = fnv1a64(nodes_.data(), nodes_.size() * sizeof(KdNode), h);
+    h = fnv1a64(wide_.data(), wide_.size() * sizeof(KdWideNode), h);
+    h = fnv1a64(leafTable_.data(), leafTable_.size() * sizeof(KdLeafRecord), h);
+    h = fnv1a64(triangles_.data(), triangles_.size() * sizeof(TriangleBlock), h);
+    h = fnv1a64(blockIds_.data(), blockIds_.size() * sizeof(PrimRef), h);
+    h = fnv1a64(mixedPrims_.data(), mixedPrims_.size() * sizeof(PrimRef), h);
     return h;
 }
 
