@@ -29,6 +29,18 @@ struct FileCloser {
 };
 using File = std::unique_ptr<FILE, FileCloser>;
 
+/// The running CRC-32 continued over n bytes: zlib's crc32 takes an unsigned length, so huge films
+/// are fed in chunks of 1 GiB.
+uLong crc32Update(uLong crc, const void* p, size_t n) {
+    const auto* b = static_cast<const Bytef*>(p);
+    for (size_t done = 0; done < n;) {
+        size_t k = std::min<size_t>(n - done, size_t(1) << 30);
+        crc = crc32(crc, b + done, uInt(k));
+        done += k;
+    }
+    return crc;
+}
+
 /// Appends bytes to a file and keeps the running CRC-32 of everything written.
 class Writer {
 public:
@@ -36,13 +48,7 @@ public:
     void bytes(const void* p, size_t n) {
         if (n == 0) return;
         if (std::fwrite(p, 1, n, f_) != n) throw InputError(path_ + ": cannot write checkpoint: " + std::strerror(errno));
-        // crc32_z takes a size_t length; chunk anyway so huge films never depend on that.
-        const auto* b = static_cast<const Bytef*>(p);
-        for (size_t done = 0; done < n;) {
-            size_t k = std::min<size_t>(n - done, size_t(1) << 30);
-            crc_ = crc32(crc_, b + done, uInt(k));
-            done += k;
-        }
+        crc_ = crc32Update(crc_, p, n);
     }
     template <class T>
     void value(const T& v) {
@@ -69,12 +75,7 @@ public:
         if (n > 0 && std::fread(p, 1, n, f_) != n)
             throw InputError(path_ + ": cannot read checkpoint (" + what + "): " + std::strerror(errno));
         left_ -= n;
-        const auto* b = static_cast<const Bytef*>(p);
-        for (size_t done = 0; done < n;) {
-            size_t k = std::min<size_t>(n - done, size_t(1) << 30);
-            crc_ = crc32(crc_, b + done, uInt(k));
-            done += k;
-        }
+        crc_ = crc32Update(crc_, p, n);
     }
     template <class T>
     T value(const char* what) {

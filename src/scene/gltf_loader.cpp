@@ -435,12 +435,7 @@ private:
         kept.reserve(mesh.triangles.size());
         for (glm::uvec3 t : mesh.triangles) {
             if (flipWinding) std::swap(t.y, t.z);
-            const Vec3f &a = mesh.positions[t.x], &b = mesh.positions[t.y], &c = mesh.positions[t.z];
-            Vec3f n = glm::cross(b - a, c - a);
-            if (!isFinite(a) || !isFinite(b) || !isFinite(c) || !(glm::dot(n, n) > 0.f) || !isFinite(n)) {
-                ++droppedTriangles_;
-                continue;
-            }
+            if (!keepTriangle(mesh, t)) continue;
             kept.push_back(t);
         }
         if (kept.empty()) fail(el, "asset '" + name + "' has no usable triangles");
@@ -555,12 +550,7 @@ private:
             mesh.triangles.reserve(tris.size());
             for (glm::uvec3 t : tris) {
                 if (flipWinding) std::swap(t.y, t.z);
-                const Vec3f &a = mesh.positions[t.x], &b = mesh.positions[t.y], &c = mesh.positions[t.z];
-                Vec3f n = glm::cross(b - a, c - a);
-                if (!isFinite(a) || !isFinite(b) || !isFinite(c) || !(glm::dot(n, n) > 0.f) || !isFinite(n)) {
-                    ++droppedTriangles_;
-                    continue;
-                }
+                if (!keepTriangle(mesh, t)) continue;
                 mesh.triangles.push_back(t);
             }
             if (mesh.triangles.empty() && !tris.empty()) {
@@ -593,6 +583,16 @@ private:
     uint32_t defaultMaterial_ = 0;
     std::set<int> visited_;
     size_t droppedTriangles_ = 0;
+
+    /// False (and counted in the warning) for a triangle of zero area or with a non-finite vertex or
+    /// normal: no structure or light may see one.
+    bool keepTriangle(const TriangleMesh& mesh, glm::uvec3 t) {
+        const Vec3f &a = mesh.positions[t.x], &b = mesh.positions[t.y], &c = mesh.positions[t.z];
+        Vec3f n = glm::cross(b - a, c - a);
+        if (isFinite(a) && isFinite(b) && isFinite(c) && glm::dot(n, n) > 0.f && isFinite(n)) return true;
+        ++droppedTriangles_;
+        return false;
+    }
 };
 
 }  // namespace
