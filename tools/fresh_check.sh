@@ -37,7 +37,7 @@ t_start=$SECONDS
 step_name=""; step_t0=0
 declare -a report=()
 begin() { step_name="$1"; step_t0=$SECONDS; echo "== fresh_check: $1"; }
-end() { local dt=$((SECONDS - step_t0)); report+=("$(printf '%-44s %5d s' "$step_name" "$dt")"); echo "== fresh_check: $step_name: ${dt} s"; step_name=""; }
+end() { local dt=$((SECONDS - step_t0)); report+=("$(printf '%-50s %5d s' "$step_name" "$dt")"); echo "== fresh_check: $step_name: ${dt} s"; step_name=""; }
 on_exit() {
   local rc=$?
   if [ -n "$step_name" ] && [ $rc -ne 0 ]; then
