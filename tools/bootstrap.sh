@@ -28,8 +28,8 @@ tessera_packages_assets=(npm ca-certificates)
 # study: tools/study and tools/make_refs.py (numpy metrics, OpenImageIO's Python binding reads the
 # EXRs, matplotlib draws the charts); Debian's python3, which is the interpreter these serve.
 tessera_packages_study=(python3 python3-numpy python3-openimageio python3-matplotlib)
-# fuzz: tools/fuzz.sh builds the libFuzzer targets with clang and its runtime.
-tessera_packages_fuzz=(clang libclang-rt-14-dev)
+# fuzz: tools/fuzz.sh builds the libFuzzer targets with clang and its runtime (python3 writes a seed).
+tessera_packages_fuzz=(clang libclang-rt-14-dev python3)
 # fresh: tools/fresh_check.sh builds a throwaway Debian 12 root file system.
 tessera_packages_fresh=(mmdebstrap zstd)
 

@@ -9,12 +9,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 seconds="${1:-300}"
 which="${2:-all}"
-for p in clang libclang-rt-14-dev; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=" $p"
-done
-if [ -n "${missing:-}" ]; then
-  apt-get update -qq >/dev/null && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $missing >/dev/null
-fi
+bash "$root/tools/bootstrap.sh" --install build fuzz
 build="$root/build-fuzz"
 targets=()
 [ "$which" = gltf ] || [ "$which" = all ] && targets+=(gltf)
