@@ -8,6 +8,7 @@ src="${1:?usage: include_layers.sh SRC_DIR}"
 # Lowest first; layers on one line share a level and may not include each other.
 layers=(
   "core"
+  "texture"
   "geometry"
   "accel"
   "materials"

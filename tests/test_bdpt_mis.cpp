@@ -28,7 +28,7 @@ void expectStoredDensitiesMatch(const RenderContext& ctx, const std::vector<Path
 /// sub-path x0 … x(s−1) (`ys`) and the camera sub-path xk … xs (`zs`), with the densities pL (from
 /// the light side) and pE (from the camera side) of every vertex.
 void splitPath(const std::vector<PathVertex>& x, const std::vector<double>& pL, const std::vector<double>& pE, int s,
-               uint32_t lightMaterial, std::vector<PathVertex>& ys, std::vector<PathVertex>& zs) {
+               const BsdfParams& lightMaterial, std::vector<PathVertex>& ys, std::vector<PathVertex>& zs) {
     const int k = int(x.size()) - 1;
     ys.assign(x.begin(), x.begin() + s);
     zs.clear();
@@ -43,7 +43,7 @@ void splitPath(const std::vector<PathVertex>& x, const std::vector<double>& pL, 
         // The camera sub-path's end lies on the light as an ordinary surface hit.
         PathVertex& e = zs.back();
         e.type = VertexType::Surface;
-        e.materialId = lightMaterial;
+        e.bsdf = lightMaterial;
         e.ns = e.ng;
         e.woWorld = glm::normalize(x[1].p - x[0].p);
     }
@@ -52,7 +52,7 @@ void splitPath(const std::vector<PathVertex>& x, const std::vector<double>& pL, 
 /// For the full path x0 … xk (x0 on a light, xk the lens): the weight of every strategy equals the
 /// brute-force p_s^β / Σ p_i^β, and the weights sum to one. False (nothing checked) when some
 /// density along the path is zero.
-bool checkWeightsOfPath(const RenderContext& ctx, const std::vector<PathVertex>& x, uint32_t lightMaterial) {
+bool checkWeightsOfPath(const RenderContext& ctx, const std::vector<PathVertex>& x, const BsdfParams& lightMaterial) {
     const int k = int(x.size()) - 1;
     // p→(x_i): density from the light side; p←(x_i): from the camera side (x_k is the lens).
     std::vector<double> pL(size_t(k + 1), 0.0), pE(size_t(k + 1), 0.0);
@@ -114,7 +114,7 @@ TEST(BdptMis, StoredDensitiesMatchAndWeightsOfAllStrategiesSumToOne) {
         std::vector<PathVertex> x;
         x.push_back(light[0]);
         for (size_t j = camera.size(); j-- > 0;) x.push_back(camera[j]);
-        if (checkWeightsOfPath(ctx, x, lightMaterial)) ++pathsChecked;
+        if (checkWeightsOfPath(ctx, x, scene.materials[lightMaterial].bsdf)) ++pathsChecked;
     }
     EXPECT_GE(pathsChecked, 50);
 }

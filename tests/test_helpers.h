@@ -89,7 +89,7 @@ inline Scene closedSphere(Rgb albedo, Rgb Le, bool asMesh, const std::vector<Poi
                    float apertureRadius = 0.f) {
     Scene scene;
     Material m;
-    m.albedo = albedo;
+    m.bsdf.baseColor = albedo;
     m.emission = Le;
     m.doubleSided = true;
     scene.materials.push_back(m);

@@ -204,7 +204,7 @@ TEST(IntegratorFurnace, ThinLensCameraInTheFurnace) {
 TEST(IntegratorAgreement, ShadingNormalsDoNotSplitRadianceAndImportanceTransport) {
     Scene scene;
     Material m;
-    m.albedo = Rgb(0.6f);
+    m.bsdf.baseColor = Rgb(0.6f);
     m.emission = Rgb(1.f);
     m.doubleSided = true;
     scene.materials.push_back(m);

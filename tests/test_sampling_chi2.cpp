@@ -87,9 +87,9 @@ double sidakLevel() { return 1.0 - std::pow(1.0 - kAlpha, 1.0 / kChi2Tests); }
 
 Material makeMaterial(MaterialType type, float alpha) {
     Material m;
-    m.type = type;
-    m.albedo = Rgb(0.9f, 0.7f, 0.5f);
-    m.alpha = alpha;
+    m.bsdf.type = type;
+    m.bsdf.baseColor = Rgb(0.9f, 0.7f, 0.5f);
+    m.bsdf.alpha = alpha;
     return m;
 }
 
@@ -104,9 +104,9 @@ TEST(SamplingChi2, BsdfSamplesFollowTheirPdfAndWeightsEqualEvalCosOverPdf) {
         for (float thetaDeg : {10.f, 45.f, 80.f}) {
             float th = thetaDeg * kPi / 180.f;
             Vec3f wo(std::sin(th), 0.f, std::cos(th));
-            SurfaceBsdf bsdf(m, nz, nz);
+            SurfaceBsdf bsdf(m.bsdf, nz, nz);
             std::vector<int> counts(size_t(kThetaBins * kPhiBins + 1), 0);
-            Pcg32 rng(uint64_t(thetaDeg * 10) + uint64_t(m.alpha * 1000), 3);
+            Pcg32 rng(uint64_t(thetaDeg * 10) + uint64_t(m.bsdf.alpha * 1000), 3);
             int badWeight = 0, badPdf = 0;
             for (int i = 0; i < n; ++i) {
                 SurfaceBsdfSample bs;
@@ -123,7 +123,7 @@ TEST(SamplingChi2, BsdfSamplesFollowTheirPdfAndWeightsEqualEvalCosOverPdf) {
                 if (std::abs(pdf - bs.pdfFwdW) > 1e-3f * pdf) ++badPdf;
                 if (glm::length(expectW - bs.weight) > 1e-3f * glm::length(expectW) + 1e-6f) ++badWeight;
             }
-            std::string what = "material " + std::to_string(int(m.type)) + " alpha " + std::to_string(m.alpha) + " theta " +
+            std::string what = "material " + std::to_string(int(m.bsdf.type)) + " alpha " + std::to_string(m.bsdf.alpha) + " theta " +
                                std::to_string(thetaDeg);
             EXPECT_LE(badPdf, n / 10000) << what;
             EXPECT_LE(badWeight, n / 10000) << what;
@@ -140,7 +140,7 @@ TEST(SamplingChi2, ImportanceTransportWeightCarriesTheShadingNormalCorrection) {
     // and radiance mode by f·|wi·ns|/pdf; the two differ exactly by the correction factor.
     Material m = makeMaterial(MaterialType::Diffuse, 0.f);
     Vec3f ng(0.f, 0.f, 1.f), ns = glm::normalize(Vec3f(0.3f, 0.1f, 1.f));
-    SurfaceBsdf bsdf(m, ns, ng);
+    SurfaceBsdf bsdf(m.bsdf, ns, ng);
     Pcg32 rng(5, 5);
     for (int i = 0; i < 1000; ++i) {
         Vec3f wo = sampleCosineHemisphere(rng.next2D());
@@ -263,8 +263,8 @@ TEST(SamplingChi2, LightEmissionDirectionsFollowPdfDirW) {
 // §5.2; the pbrt bug of applying it to both). The mirror reflects exactly.
 TEST(SamplingChi2, DeltaBsdfsPickLobesByFresnelAndScaleOnlyRadiance) {
     Material glass = makeMaterial(MaterialType::Dielectric, 0.f);
-    glass.albedo = Rgb(1.f);
-    glass.ior = 1.5f;
+    glass.bsdf.baseColor = Rgb(1.f);
+    glass.bsdf.ior = 1.5f;
     Material mirror = makeMaterial(MaterialType::Mirror, 0.f);
     const Vec3f nz(0.f, 0.f, 1.f);
     const int n = 100000;
@@ -272,9 +272,9 @@ TEST(SamplingChi2, DeltaBsdfsPickLobesByFresnelAndScaleOnlyRadiance) {
         for (float side : {1.f, -1.f}) {  // arriving from outside, and from inside the glass
             float th = thetaDeg * kPi / 180.f;
             Vec3f wo(std::sin(th), 0.f, side * std::cos(th));
-            SurfaceBsdf bsdf(glass, nz, nz);
-            float F = fresnelDielectric(wo.z, glass.ior);
-            float etaT = side > 0.f ? glass.ior : 1.f, etaI = side > 0.f ? 1.f : glass.ior;
+            SurfaceBsdf bsdf(glass.bsdf, nz, nz);
+            float F = fresnelDielectric(wo.z, glass.bsdf.ior);
+            float etaT = side > 0.f ? glass.bsdf.ior : 1.f, etaI = side > 0.f ? 1.f : glass.bsdf.ior;
             Pcg32 rng(uint64_t(thetaDeg), side > 0.f ? 1u : 2u);
             int reflected = 0;
             for (int i = 0; i < n; ++i) {
@@ -299,7 +299,7 @@ TEST(SamplingChi2, DeltaBsdfsPickLobesByFresnelAndScaleOnlyRadiance) {
             double e = double(F) * n, sd = std::sqrt(double(n) * F * (1.0 - F));
             EXPECT_LT(std::abs(reflected - e), 5.0 * sd + 1.0) << "theta " << thetaDeg << " side " << side << " F " << F;
         }
-        SurfaceBsdf m(mirror, nz, nz);
+        SurfaceBsdf m(mirror.bsdf, nz, nz);
         Vec3f wo(std::sin(thetaDeg * kPi / 180.f), 0.f, std::cos(thetaDeg * kPi / 180.f));
         SurfaceBsdfSample r;
         ASSERT_TRUE(m.sample(wo, 0.3f, Vec2f(0.2f, 0.7f), TransportMode::Radiance, r));

@@ -3,11 +3,13 @@
 /// The two shapes Tessera models: triangle meshes and analytic spheres, both in world space, and the
 /// SceneGeometry that every acceleration structure is built from.
 #include <glm/vec3.hpp>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/bounds.h"
 #include "core/math.h"
+#include "geometry/alpha_mask.h"
 
 namespace tessera {
 
@@ -19,6 +21,9 @@ struct TriangleMesh {
     std::vector<Vec3f> normals;     ///< optional per-vertex shading normals (world space, unit)
     std::vector<glm::uvec3> triangles;
     uint32_t materialId = 0;
+    std::vector<Vec2f> texcoords[2];  ///< optional TEXCOORD_0 / TEXCOORD_1 per vertex
+    std::vector<Vec4f> tangents;      ///< optional per-vertex tangents (world xyz, unit; w = ±1 bitangent sign)
+    std::shared_ptr<const AlphaMask> alphaMask;  ///< set for cut-out materials: hits are filtered by it
 };
 
 struct Sphere {

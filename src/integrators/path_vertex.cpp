@@ -29,7 +29,7 @@ float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVerte
         return pdfLightDirectionA(ctx, cur, next);
     case VertexType::Surface: {
         if (!prev) return 0.f;
-        SurfaceBsdf bsdf(ctx.scene.materials[cur.materialId], cur.ns, cur.ng);
+        SurfaceBsdf bsdf(cur.bsdf, cur.ns, cur.ng);
         Vec3f wo = glm::normalize(prev->p - cur.p);
         pdfW = bsdf.pdfFwdW(wo, wi);
         break;
@@ -69,7 +69,7 @@ Rgb evalVertex(const RenderContext& ctx, const PathVertex& v, const PathVertex& 
         return lights.emitted(v.lightIndex, v.ng, w);
     }
     case VertexType::Surface: {
-        SurfaceBsdf bsdf(ctx.scene.materials[v.materialId], v.ns, v.ng);
+        SurfaceBsdf bsdf(v.bsdf, v.ns, v.ng);
         return bsdf.eval(v.woWorld, w, mode);
     }
     }
@@ -104,7 +104,7 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         v.ns = si.ns;
         v.woWorld = -glm::normalize(ray.d);
         v.beta = beta;
-        v.materialId = si.materialId;
+        v.bsdf = scene.bsdfParams(si);
         v.lightIndex = si.lightIndex;
         // Densities are evaluated from the vertex positions rather than taken from the sampling
         // routine: the connection code evaluates them the same way, so every strategy sees exactly
@@ -120,7 +120,7 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         if (int(out.size()) >= limit) break;
 
         PathVertex& cur = out.back();
-        SurfaceBsdf bsdf(scene.materials[cur.materialId], cur.ns, cur.ng);
+        SurfaceBsdf bsdf(cur.bsdf, cur.ns, cur.ng);
         SurfaceBsdfSample bs;
         float uLobe = sampler.get1D();
         Vec2f uDir = sampler.get2D();

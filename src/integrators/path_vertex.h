@@ -25,7 +25,7 @@ struct PathVertex {
     Vec3f ns{0.f};       ///< shading normal (surfaces; = ng otherwise)
     Vec3f woWorld{0.f};  ///< unit direction towards the previous vertex of its own sub-path (surfaces)
     Rgb beta{0.f};       ///< sub-path throughput up to this vertex (Veach's α, eq. 10.4/10.5)
-    uint32_t materialId = 0;
+    BsdfParams bsdf;     ///< the BSDF inputs at p (textures resolved), for surface vertices
     uint32_t lightIndex = kInvalidId;  ///< light vertex: its light; surface vertex: the emitter it lies on, if any
     bool delta = false;  ///< scattered by a delta BSDF here (cannot be a connection end)
     float pdfFwdA = 0.f;

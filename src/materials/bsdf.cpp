@@ -28,7 +28,7 @@ inline bool refractLocal(const Vec3f& wi, float eta, Vec3f& wt) {
     return true;
 }
 
-inline float alphaOf(const Material& m) { return std::max(m.alpha, 1e-3f); }
+inline float alphaOf(const BsdfParams& m) { return std::max(m.alpha, 1e-3f); }
 
 }  // namespace
 
@@ -77,14 +77,14 @@ Vec3f sampleVisibleNormal(const Vec3f& wo, float alpha, Vec2f u) {
 }
 }  // namespace ggx
 
-Rgb evalBsdf(const Material& m, const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) {
+Rgb evalBsdf(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) {
     if (woIn.z == 0.f) return Rgb(0.f);
     // Two-sided: mirror the frame so that wo is above the surface.
     float flip = woIn.z < 0.f ? -1.f : 1.f;
     Vec3f wo(woIn.x, woIn.y, woIn.z * flip), wi(wiIn.x, wiIn.y, wiIn.z * flip);
     switch (m.type) {
     case MaterialType::Diffuse:
-        return wi.z > 0.f ? m.albedo * kInvPi : Rgb(0.f);
+        return wi.z > 0.f ? m.baseColor * kInvPi : Rgb(0.f);
     case MaterialType::RoughConductor: {
         if (wi.z <= 0.f) return Rgb(0.f);
         Vec3f wm = wi + wo;
@@ -92,7 +92,7 @@ Rgb evalBsdf(const Material& m, const Vec3f& woIn, const Vec3f& wiIn, TransportM
         wm = glm::normalize(wm);
         float a = alphaOf(m);
         float G = 1.f / (1.f + ggx::lambda(wo, a) + ggx::lambda(wi, a));
-        Rgb F = fresnelSchlick(m.albedo, std::abs(glm::dot(wi, wm)));
+        Rgb F = fresnelSchlick(m.baseColor, std::abs(glm::dot(wi, wm)));
         return ggx::D(wm, a) * G * F / (4.f * wo.z * wi.z);
     }
     case MaterialType::Mirror:
@@ -102,7 +102,7 @@ Rgb evalBsdf(const Material& m, const Vec3f& woIn, const Vec3f& wiIn, TransportM
     return Rgb(0.f);
 }
 
-float pdfBsdfW(const Material& m, const Vec3f& woIn, const Vec3f& wiIn) {
+float pdfBsdfW(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn) {
     if (woIn.z == 0.f) return 0.f;
     float flip = woIn.z < 0.f ? -1.f : 1.f;
     Vec3f wo(woIn.x, woIn.y, woIn.z * flip), wi(wiIn.x, wiIn.y, wiIn.z * flip);
@@ -127,7 +127,7 @@ float pdfBsdfW(const Material& m, const Vec3f& woIn, const Vec3f& wiIn) {
     return 0.f;
 }
 
-bool sampleBsdf(const Material& m, const Vec3f& woIn, float uLobe, Vec2f u, TransportMode mode, BsdfSample& out) {
+bool sampleBsdf(const BsdfParams& m, const Vec3f& woIn, float uLobe, Vec2f u, TransportMode mode, BsdfSample& out) {
     if (woIn.z == 0.f) return false;
     float flip = woIn.z < 0.f ? -1.f : 1.f;
     Vec3f wo(woIn.x, woIn.y, woIn.z * flip);
@@ -137,14 +137,14 @@ bool sampleBsdf(const Material& m, const Vec3f& woIn, float uLobe, Vec2f u, Tran
         wi = sampleCosineHemisphere(u);
         if (wi.z <= 0.f) return false;
         out.pdfW = cosineHemispherePdfW(wi.z);
-        out.weight = m.albedo;  // (albedo/π)·cos θ / (cos θ/π)
+        out.weight = m.baseColor;  // (albedo/π)·cos θ / (cos θ/π)
         out.isDelta = false;
         break;
     }
     case MaterialType::Mirror: {
         wi = reflectLocal(wo);
         out.pdfW = 1.f;
-        out.weight = fresnelSchlick(m.albedo, wo.z);
+        out.weight = fresnelSchlick(m.baseColor, wo.z);
         out.isDelta = true;
         break;
     }
@@ -169,7 +169,7 @@ bool sampleBsdf(const Material& m, const Vec3f& woIn, float uLobe, Vec2f u, Tran
         out.wiLocal = wt;
         out.pdfW = 1.f - F;
         // Radiance is compressed by (η_i/η_t)² on refraction; importance is not (Veach 1997, §5.2).
-        out.weight = m.albedo * (mode == TransportMode::Radiance ? 1.f / (eta * eta) : 1.f);
+        out.weight = m.baseColor * (mode == TransportMode::Radiance ? 1.f / (eta * eta) : 1.f);
         out.eta = eta;
         return true;
     }
@@ -182,7 +182,7 @@ bool sampleBsdf(const Material& m, const Vec3f& woIn, float uLobe, Vec2f u, Tran
         float G = 1.f / (1.f + ggx::lambda(wo, a) + ggx::lambda(wi, a));
         out.pdfW = g1o * ggx::D(wm, a) / (4.f * wo.z);
         // f cos/pdf = F · G / G1(wo) for visible-normal sampling (Heitz 2018, eq. 19).
-        out.weight = fresnelSchlick(m.albedo, std::abs(glm::dot(wi, wm))) * (G / g1o);
+        out.weight = fresnelSchlick(m.baseColor, std::abs(glm::dot(wi, wm))) * (G / g1o);
         out.isDelta = false;
         break;
     }

@@ -17,17 +17,17 @@ struct BsdfSample {
 };
 
 /// True when the material scatters only into discrete directions (eval and pdf are zero everywhere).
-inline bool isDeltaMaterial(const Material& m) {
+inline bool isDeltaMaterial(const BsdfParams& m) {
     return m.type == MaterialType::Mirror || m.type == MaterialType::Dielectric;
 }
 
 /// f(wo, wi) without the cosine factor.
-Rgb evalBsdf(const Material& m, const Vec3f& woLocal, const Vec3f& wiLocal, TransportMode mode);
+Rgb evalBsdf(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal, TransportMode mode);
 /// Solid-angle density with which sampleBsdf generates wi given wo.
-float pdfBsdfW(const Material& m, const Vec3f& woLocal, const Vec3f& wiLocal);
+float pdfBsdfW(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal);
 /// Samples wi given wo; `uLobe` picks reflection/refraction, `u` the direction. False when no
 /// direction is produced (e.g. wo grazing).
-bool sampleBsdf(const Material& m, const Vec3f& woLocal, float uLobe, Vec2f u, TransportMode mode, BsdfSample& out);
+bool sampleBsdf(const BsdfParams& m, const Vec3f& woLocal, float uLobe, Vec2f u, TransportMode mode, BsdfSample& out);
 
 /// Unpolarised Fresnel reflectance of a dielectric interface; eta = η_inside / η_outside, cosThetaI
 /// signed (negative: arriving from inside). Exact formula (Born & Wolf; pbrt-v4 eq. 9.5 form).

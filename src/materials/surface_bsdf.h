@@ -27,7 +27,7 @@ struct SurfaceBsdfSample {
 
 class SurfaceBsdf {
 public:
-    SurfaceBsdf(const Material& material, const Vec3f& ns, const Vec3f& ng) : mat_(material), frame_(ns), ng_(ng) {}
+    SurfaceBsdf(const BsdfParams& params, const Vec3f& ns, const Vec3f& ng) : mat_(params), frame_(ns), ng_(ng) {}
 
     bool isDelta() const { return isDeltaMaterial(mat_); }
     const Vec3f& ns() const { return frame_.n; }
@@ -51,7 +51,7 @@ private:
     /// True when wo → wi is on consistent sides of the shading and the geometric normal.
     bool sidesAgree(const Vec3f& woWorld, const Vec3f& wiWorld) const;
 
-    const Material& mat_;
+    BsdfParams mat_;  ///< by value: textured points resolve their own parameters
     Frame frame_;
     Vec3f ng_;
 };

@@ -196,7 +196,7 @@ private:
             if (bc.size() < 3) fail(el, "baseColorFactor must have 4 components");
             for (int c = 0; c < 3; ++c) {
                 if (!(bc[c] >= 0.0 && bc[c] <= 1.0)) fail(el, "baseColorFactor components must be in [0, 1]");
-                m.albedo[c] = float(bc[c]);
+                m.bsdf.baseColor[c] = float(bc[c]);
             }
             double metallic = gm.pbrMetallicRoughness.metallicFactor;
             double roughness = gm.pbrMetallicRoughness.roughnessFactor;
@@ -214,11 +214,11 @@ private:
                 if (strength < 0) fail(el + ".extensions.KHR_materials_emissive_strength", "emissiveStrength must be >= 0");
             }
             if (transmission > 0.0) {
-                m.type = MaterialType::Dielectric;
-                m.ior = float(ior);
+                m.bsdf.type = MaterialType::Dielectric;
+                m.bsdf.ior = float(ior);
             } else if (metallic >= 0.5) {
-                m.type = roughness == 0.0 ? MaterialType::Mirror : MaterialType::RoughConductor;
-                m.alpha = float(roughness * roughness);
+                m.bsdf.type = roughness == 0.0 ? MaterialType::Mirror : MaterialType::RoughConductor;
+                m.bsdf.alpha = float(roughness * roughness);
             }
             if (gm.emissiveFactor.size() >= 3) {
                 for (int c = 0; c < 3; ++c) {
@@ -235,7 +235,7 @@ private:
         defaultMaterial_ = uint32_t(scene_.materials.size());
         Material def;
         def.name = "default";
-        def.albedo = Rgb(0.8f);
+        def.bsdf.baseColor = Rgb(0.8f);
         scene_.materials.push_back(def);
     }
 

@@ -7,7 +7,7 @@ namespace tessera {
 void Scene::finalize() { lights_.build(geometry, materials, pointLights); }
 
 Scene::Scene(Scene&& o) noexcept
-    : geometry(std::move(o.geometry)), materials(std::move(o.materials)), pointLights(std::move(o.pointLights)), camera(std::move(o.camera)),
+    : geometry(std::move(o.geometry)), materials(std::move(o.materials)), images(std::move(o.images)), pointLights(std::move(o.pointLights)), camera(std::move(o.camera)),
       settings(std::move(o.settings)), sourcePath(std::move(o.sourcePath)), lights_(std::move(o.lights_)) {
     lights_.rebind(geometry);
 }
@@ -15,6 +15,7 @@ Scene::Scene(Scene&& o) noexcept
 Scene& Scene::operator=(Scene&& o) noexcept {
     geometry = std::move(o.geometry);
     materials = std::move(o.materials);
+    images = std::move(o.images);
     pointLights = std::move(o.pointLights);
     camera = std::move(o.camera);
     settings = std::move(o.settings);

@@ -1,6 +1,7 @@
 #pragma once
 /// \file scene.h
 /// A loaded scene: geometry, materials, lights, camera and the render defaults the file asks for.
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -43,6 +44,7 @@ public:
 
     SceneGeometry geometry;
     std::vector<Material> materials;
+    std::vector<std::unique_ptr<Image>> images;  ///< decoded textures; materials and alpha masks point into them
     std::vector<PointLightDesc> pointLights;  ///< KHR_lights_punctual point lights (world space)
     std::optional<CameraDesc> camera;
     RenderSettings settings;
@@ -56,6 +58,8 @@ public:
     /// (barycentric interpolation / reprojection onto the sphere), which is far more accurate than
     /// o + t·d and is what makes ray spawning with a few ulps of offset safe.
     SurfaceInteraction interaction(const Ray& ray, const Hit& hit) const;
+    /// The BSDF inputs at `si`: its material's factors times its textures there.
+    BsdfParams bsdfParams(const SurfaceInteraction& si) const { return materials[si.materialId].bsdf; }
 
 private:
     LightSet lights_;
