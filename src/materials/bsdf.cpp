@@ -77,6 +77,12 @@ Vec3f sampleVisibleNormal(const Vec3f& wo, float alpha, Vec2f u) {
 }
 }  // namespace ggx
 
+void finalizeBsdfParams(BsdfParams& p) {
+    if (p.transmission > 0.f) p.type = MaterialType::Dielectric;
+    else if (p.metallic >= 0.5f) p.type = p.alpha == 0.f ? MaterialType::Mirror : MaterialType::RoughConductor;
+    else p.type = MaterialType::Diffuse;
+}
+
 Rgb evalBsdf(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) {
     if (woIn.z == 0.f) return Rgb(0.f);
     // Two-sided: mirror the frame so that wo is above the surface.

@@ -16,6 +16,10 @@ struct BsdfSample {
     float eta = 1.f;   ///< η_t / η_i of a refraction (1 for reflection): lets Russian roulette undo the 1/η² radiance scaling
 };
 
+/// Sets `p.type` from the factors (metallic, alpha, transmission, specular) of a surface point:
+/// called by the scene loader for each material and again after textures change the factors.
+void finalizeBsdfParams(BsdfParams& p);
+
 /// True when the material scatters only into discrete directions (eval and pdf are zero everywhere).
 inline bool isDeltaMaterial(const BsdfParams& m) {
     return m.type == MaterialType::Mirror || m.type == MaterialType::Dielectric;

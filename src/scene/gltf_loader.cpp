@@ -9,6 +9,7 @@
 #include <set>
 
 #include "core/error.h"
+#include "materials/bsdf.h"
 #include "scene/mesh_loader.h"
 
 namespace tessera {
@@ -145,6 +146,21 @@ private:
                 fail("extensionsRequired", "unsupported required extension '" + e + "'");
     }
 
+    /// An optional RGB array member with components in [0, maxComponent].
+    Rgb color3(const gl::Value& obj, const char* key, const std::string& element, Rgb fallback, double maxComponent) const {
+        if (!obj.IsObject() || !obj.Has(key)) return fallback;
+        const gl::Value& a = obj.Get(key);
+        if (!a.IsArray() || a.ArrayLen() != 3) fail(element, std::string(key) + " must be an array of 3 numbers");
+        Rgb c;
+        for (int i = 0; i < 3; ++i) {
+            const gl::Value& x = a.Get(i);
+            double d = x.IsNumber() ? x.GetNumberAsDouble() : -1.0;
+            if (!(d >= 0.0 && d <= maxComponent)) fail(element, std::string(key) + " components must be in [0, " + (maxComponent > 1e29 ? "inf" : "1") + ")");
+            c[i] = float(d);
+        }
+        return c;
+    }
+
     double number(const gl::Value& obj, const char* key, const std::string& element, double fallback) const {
         if (!obj.Has(key)) return fallback;
         const gl::Value& v = obj.Get(key);
@@ -213,13 +229,31 @@ private:
                 strength = number(t->second, "emissiveStrength", el + ".extensions.KHR_materials_emissive_strength", 1.0);
                 if (strength < 0) fail(el + ".extensions.KHR_materials_emissive_strength", "emissiveStrength must be >= 0");
             }
-            if (transmission > 0.0) {
-                m.bsdf.type = MaterialType::Dielectric;
-                m.bsdf.ior = float(ior);
-            } else if (metallic >= 0.5) {
-                m.bsdf.type = roughness == 0.0 ? MaterialType::Mirror : MaterialType::RoughConductor;
-                m.bsdf.alpha = float(roughness * roughness);
+            if (auto t = gm.extensions.find("KHR_materials_specular"); t != gm.extensions.end()) {
+                const std::string sel = el + ".extensions.KHR_materials_specular";
+                double f = number(t->second, "specularFactor", sel, 1.0);
+                if (!(f >= 0.0 && f <= 1.0)) fail(sel, "specularFactor must be in [0, 1]");
+                m.bsdf.specular = float(f);
+                m.bsdf.specularColor = color3(t->second, "specularColorFactor", sel, Rgb(1.f), 1e30);
             }
+            if (auto t = gm.extensions.find("KHR_materials_volume"); t != gm.extensions.end()) {
+                const std::string vel = el + ".extensions.KHR_materials_volume";
+                double thickness = number(t->second, "thicknessFactor", vel, 0.0);
+                if (!(thickness >= 0.0) || !std::isfinite(thickness)) fail(vel, "thicknessFactor must be finite and >= 0");
+                double distance = number(t->second, "attenuationDistance", vel, kInfinity);
+                if (!(distance > 0.0)) fail(vel, "attenuationDistance must be > 0");
+                Rgb color = color3(t->second, "attenuationColor", vel, Rgb(1.f), 1.0);
+                m.bsdf.thinWalled = thickness == 0.0;
+                // Beer–Lambert: attenuationColor is the transmittance after attenuationDistance,
+                // so σa = −ln(color) / distance (KHR_materials_volume).
+                if (!m.bsdf.thinWalled && std::isfinite(distance))
+                    for (int c = 0; c < 3; ++c) m.bsdf.attenuationCoeff[c] = float(-std::log(std::max(double(color[c]), 1e-30)) / distance);
+            }
+            m.bsdf.metallic = float(metallic);
+            m.bsdf.alpha = float(roughness * roughness);
+            m.bsdf.transmission = float(transmission);
+            m.bsdf.ior = float(ior);
+            finalizeBsdfParams(m.bsdf);
             if (gm.emissiveFactor.size() >= 3) {
                 for (int c = 0; c < 3; ++c) {
                     double e = gm.emissiveFactor[c] * strength;
@@ -599,6 +633,7 @@ private:
 
 std::vector<std::string> supportedGltfExtensions() {
     return {"KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior",
+            "KHR_materials_specular", "KHR_materials_volume",
             "TESSERA_render", "TESSERA_sphere", "TESSERA_thin_lens", "TESSERA_asset_mesh"};
 }
 
