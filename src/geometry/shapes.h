@@ -24,6 +24,17 @@ struct TriangleMesh {
     std::vector<Vec2f> texcoords[2];  ///< optional TEXCOORD_0 / TEXCOORD_1 per vertex
     std::vector<Vec4f> tangents;      ///< optional per-vertex tangents (world xyz, unit; w = ±1 bitangent sign)
     std::shared_ptr<const AlphaMask> alphaMask;  ///< set for cut-out materials: hits are filtered by it
+
+    bool hasTexcoords(int set) const { return !texcoords[set].empty(); }
+    /// TEXCOORD_`set` interpolated at barycentrics (u, v) of triangle `primId` (u, v weigh vertices
+    /// 1 and 2, as in Hit); (0, 0) when the mesh has no such set. The one interpolation that alpha
+    /// masks, material textures and textured emitters share.
+    Vec2f texcoordAt(int set, uint32_t primId, float u, float v) const {
+        const std::vector<Vec2f>& uv = texcoords[set];
+        if (uv.empty()) return Vec2f(0.f);
+        const glm::uvec3& t = triangles[primId];
+        return (1.f - u - v) * uv[t.x] + u * uv[t.y] + v * uv[t.z];
+    }
 };
 
 struct Sphere {

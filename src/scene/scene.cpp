@@ -28,6 +28,9 @@ Scene& Scene::operator=(Scene&& o) noexcept {
 SurfaceInteraction Scene::interaction(const Ray& ray, const Hit& hit) const {
     SurfaceInteraction si;
     si.ng = hit.ng;
+    si.geomId = hit.geomId;
+    si.primId = hit.primId;
+    si.bary = Vec2f(hit.u, hit.v);
     if (hit.geomId < geometry.meshes.size()) {
         const TriangleMesh& mesh = geometry.meshes[hit.geomId];
         const glm::uvec3& t = mesh.triangles[hit.primId];
