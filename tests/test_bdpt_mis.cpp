@@ -39,8 +39,9 @@ void splitPath(const std::vector<PathVertex>& x, const std::vector<double>& pL, 
         v.pdfRevA = float(pL[size_t(i)]);
         zs.push_back(v);
     }
-    if (s == 0) {
-        // The camera sub-path's end lies on the light as an ordinary surface hit.
+    if (s == 0 && !x[0].atInfinity) {
+        // The camera sub-path's end lies on the light as an ordinary surface hit (an escaped camera
+        // ray's end is the light vertex at infinity itself).
         PathVertex& e = zs.back();
         e.type = VertexType::Surface;
         e.bsdf = lightMaterial;
@@ -51,8 +52,10 @@ void splitPath(const std::vector<PathVertex>& x, const std::vector<double>& pL, 
 
 /// For the full path x0 … xk (x0 on a light, xk the lens): the weight of every strategy equals the
 /// brute-force p_s^β / Σ p_i^β, and the weights sum to one. False (nothing checked) when some
-/// density along the path is zero.
-bool checkWeightsOfPath(const RenderContext& ctx, const std::vector<PathVertex>& x, const BsdfParams& lightMaterial) {
+/// density along the path is zero. A delta light (`lightIsDelta`: point, spot, directional) cannot
+/// be hit, so the strategy s = 0 does not exist for it.
+bool checkWeightsOfPath(const RenderContext& ctx, const std::vector<PathVertex>& x, const BsdfParams& lightMaterial,
+                        bool lightIsDelta = false) {
     const int k = int(x.size()) - 1;
     // p→(x_i): density from the light side; p←(x_i): from the camera side (x_k is the lens).
     std::vector<double> pL(size_t(k + 1), 0.0), pE(size_t(k + 1), 0.0);
@@ -66,7 +69,7 @@ bool checkWeightsOfPath(const RenderContext& ctx, const std::vector<PathVertex>&
         double beta = h == MisHeuristic::Power ? 2.0 : 1.0;
         std::vector<double> ps(size_t(k + 1));
         double sumPs = 0.0;
-        for (int s = 0; s <= k; ++s) {  // t = k + 1 − s ≥ 1
+        for (int s = lightIsDelta ? 1 : 0; s <= k; ++s) {  // t = k + 1 − s ≥ 1
             double p = 1.0;
             for (int i = 0; i < s; ++i) p *= pL[size_t(i)];
             for (int i = s; i < k; ++i) p *= pE[size_t(i)];
@@ -75,7 +78,7 @@ bool checkWeightsOfPath(const RenderContext& ctx, const std::vector<PathVertex>&
         }
         double sumW = 0.0;
         std::vector<PathVertex> ys, zs;
-        for (int s = 0; s <= k; ++s) {
+        for (int s = lightIsDelta ? 1 : 0; s <= k; ++s) {
             int t = k + 1 - s;
             splitPath(x, pL, pE, s, lightMaterial, ys, zs);
             float w = bdptStrategyWeight(ctx, ys, zs, s, t, s > 0 ? &ys.back() : nullptr, &zs.back(), h);
@@ -134,4 +137,55 @@ TEST(BdptMis, DeltaVerticesAreSkippedAndTheRestSumToOne) {
         if (possible) sum += w;
     }
     EXPECT_NEAR(sum, 1.0, 1e-5);
+}
+
+// Paths that start at infinity (pbrt-v3 §16.3.1's infinite lights): the environment (as the origin
+// of a light sub-path, or the end of a camera ray that escaped) and a directional light. Their
+// first vertex has a direction, not a position: its density is in solid angle and the next
+// vertex's is the emission disk's 1/(π r²) times the cosine there. The weights of all strategies
+// must still sum to one and equal the brute-force ratios, in the Cornell box (open at the front,
+// so camera rays escape) lit by its area light, a constant environment and a sun.
+TEST(BdptMis, WeightsSumToOneOnPathsFromTheEnvironmentAndADirectionalLight) {
+    std::vector<std::string> warnings;
+    Scene scene = loadGltfScene(test::sourcePath("scenes/cornell-box/cornell-box.gltf"), warnings);
+    EnvironmentDesc env;
+    env.color = Rgb(0.4f, 0.5f, 0.6f);
+    scene.environment = env;
+    // Shining into the box through its open front (the camera looks down +z into it).
+    scene.directionalLights.push_back({glm::normalize(Vec3f(0.2f, -0.3f, 1.f)), Rgb(3.f)});
+    scene.finalize();
+    const LightSet& lights = scene.lights();
+    ASSERT_TRUE(lights.hasEnvironment());
+    auto accel = createAccel("embree", scene.geometry);
+    Camera cam(*scene.camera, 32, 32);
+    RenderContext ctx{scene, *accel, cam, -1};
+    BsdfParams unused;
+
+    std::vector<PathVertex> camera, light;
+    int fromEnvironment = 0, escaped = 0, fromDirectional = 0;
+    for (uint32_t trial = 0; trial < 3000 && (fromEnvironment < 40 || escaped < 40 || fromDirectional < 40); ++trial) {
+        Sampler sampler(Vec2i(int(trial % 32), int(trial / 32)), trial, 29);
+        traceCameraSubpath(ctx, Vec2f(float(trial % 32) + 0.5f, float((trial / 32) % 32) + 0.5f), sampler, -1, camera);
+        traceLightSubpath(ctx, sampler, -1, light);
+        expectStoredDensitiesMatch(ctx, camera, "camera");
+        expectStoredDensitiesMatch(ctx, light, "light");
+        if (!light.empty()) expectRelNear(light[0].pdfFwdA, pdfLightOriginA(ctx, light[0]), 1e-5, "light origin");
+        if (camera.size() < 2) continue;
+        std::vector<PathVertex> x;
+        if (camera.back().atInfinity) {
+            // The camera ray escaped: the path starts at the environment vertex it ends with.
+            if (camera.size() < 3) continue;  // the environment seen directly has one strategy
+            for (size_t j = camera.size(); j-- > 0;) x.push_back(camera[j]);
+            if (checkWeightsOfPath(ctx, x, unused)) ++escaped;
+            continue;
+        }
+        if (light.empty() || !light[0].atInfinity) continue;
+        x.push_back(light[0]);
+        for (size_t j = camera.size(); j-- > 0;) x.push_back(camera[j]);
+        bool directional = lights.isDelta(light[0].lightIndex);
+        if (checkWeightsOfPath(ctx, x, unused, directional)) ++(directional ? fromDirectional : fromEnvironment);
+    }
+    EXPECT_GE(fromEnvironment, 40);
+    EXPECT_GE(escaped, 40);
+    EXPECT_GE(fromDirectional, 40);
 }

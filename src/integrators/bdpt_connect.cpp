@@ -34,6 +34,9 @@ private:
 
 float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
                          int s, int t, const PathVertex* qs, const PathVertex* pt, MisHeuristic heuristic) {
+    // A camera ray that escaped to the environment (z1 at infinity) can only be found by that
+    // camera ray: no lens connection reaches a direction.
+    if (s == 0 && t == 2 && pt->atInfinity) return 1.f;
     MisScratch y{size_t(s)}, z{size_t(t)};
     for (int i = 0; i < s; ++i) y[size_t(i)] = {light[size_t(i)].pdfFwdA, light[size_t(i)].pdfRevA, light[size_t(i)].delta};
     for (int i = 0; i < t; ++i) z[size_t(i)] = {camera[size_t(i)].pdfFwdA, camera[size_t(i)].pdfRevA, camera[size_t(i)].delta};
@@ -61,7 +64,7 @@ float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> l
     bool lightIsDelta = false;
     if (s > 0) {
         const PathVertex& y0 = s == 1 ? *qs : light[0];
-        lightIsDelta = ctx.scene.lights().isDeltaPosition(y0.lightIndex);
+        lightIsDelta = ctx.scene.lights().isDelta(y0.lightIndex);  // point, spot, directional: never hit
     }
     return bdptMisWeight({y.data(), size_t(s)}, {z.data(), size_t(t)}, lightIsDelta, heuristic);
 }
@@ -99,14 +102,13 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
         const LightSample& ls = ne.light;
         sampled.type = VertexType::Light;
         sampled.p = ls.p;
-        sampled.ng = sampled.ns = ls.n;
+        sampled.atInfinity = ls.isInfinite;
+        sampled.ng = sampled.ns = ls.isInfinite ? ls.wi : ls.n;
         sampled.lightIndex = ls.index;
-        sampled.beta = ls.Le / ls.pdfW;  // radiance (area) or I/d² (point) over the NEE density
-        Vec3f w = ls.p - pt->p;
-        float len = glm::length(w);
-        if (!(len > 0.f)) return r;
+        // Radiance (area, environment), I/d² (point, spot) or E (directional) over the NEE density.
+        sampled.beta = ls.Le / ls.pdfW;
         Rgb f = evalVertex(ctx, *pt, sampled, TransportMode::Radiance);
-        r.L = pt->beta * f * sampled.beta * cosAt(*pt, w / len);
+        r.L = pt->beta * f * sampled.beta * cosAt(*pt, ls.wi);
         if (isBlack(r.L) || !lightVisible(ctx.accel, pt->p, pt->ng, ls)) return ConnectionResult{};
         qs = &sampled;
     } else {

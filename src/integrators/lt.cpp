@@ -14,7 +14,10 @@ namespace tessera {
 // traces one light path, so a pixel receives (W·H·spp) paths whose We is normalised over the whole
 // film: We·(W·H) per pixel, divided by W·H·spp paths = 1/spp per splat. Paths whose camera-side
 // vertex is delta (seen through a mirror or glass) cannot be connected and are missed.
-Rgb LtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f, Sampler& sampler, SplatSink& splats) const {
+// The environment seen directly is the one path no light sub-path can reach (its vertex lies at
+// infinity, so no lens connection ends there): a camera ray finds it (BDPT's s = 0, t = 2 strategy,
+// the only strategy for these paths, so it needs no weight).
+Rgb LtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& sampler, SplatSink& splats) const {
     thread_local std::vector<PathVertex> light;
     int maxVertices = ctx.maxDepth < 0 ? -1 : ctx.maxDepth + 1;
     traceLightSubpath(ctx, sampler, maxVertices, light);
@@ -29,7 +32,14 @@ Rgb LtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f, Sampler& sample
         }
         if (!isBlack(r.L)) splats.splat(ctx.camera.width(), ctx.camera.height(), r.raster, r.L);
     }
-    return Rgb(0.f);
+    const LightSet& lights = ctx.scene.lights();
+    if (!lights.hasEnvironment()) return Rgb(0.f);  // no random numbers drawn: scenes without one are unchanged
+    Ray ray = ctx.camera.generateRay(raster, sampler.get2D());
+    Hit hit;
+    if (ctx.accel.intersectCoherent(ray, hit)) return Rgb(0.f);
+    Rgb Le = lights.environmentLe(glm::normalize(ray.d));
+    if (ctx.trace) [[unlikely]] ctx.trace->add("environmentSeenDirectly", Le);
+    return Le;
 }
 
 }  // namespace tessera

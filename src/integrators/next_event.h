@@ -28,8 +28,9 @@ bool sampleNextEvent(const LightSet& lights, const Vec3f& p, const Vec3f& ng, co
                      NextEventSample& out);
 
 /// True when nothing blocks the segment between the surface point (p, ng) and the sampled light
-/// point (both ends offset off their surfaces).
+/// point (both ends offset off their surfaces), or, for an infinite light, the ray towards it.
 inline bool lightVisible(const Accel& accel, const Vec3f& p, const Vec3f& ng, const LightSample& light) {
+    if (light.isInfinite) return !accel.occluded(spawnRay(p, ng, light.wi));
     return !accel.occluded(spawnShadowRay(p, ng, light.p, light.n));
 }
 

@@ -5,6 +5,7 @@
 namespace tessera {
 
 float convertDensity(float pdfW, const PathVertex& from, const PathVertex& to) {
+    if (to.atInfinity) return pdfW;  // a direction has no area: densities towards it stay in solid angle
     Vec3f w = to.p - from.p;
     float dist2 = glm::dot(w, w);
     if (!(dist2 > 0.f)) return 0.f;
@@ -14,10 +15,8 @@ float convertDensity(float pdfW, const PathVertex& from, const PathVertex& to) {
 }
 
 float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next) {
-    Vec3f wi = next.p - cur.p;
-    float len = glm::length(wi);
-    if (!(len > 0.f)) return 0.f;
-    wi /= len;
+    Vec3f wi = directionTo(cur, next);
+    if (wi == Vec3f(0.f)) return 0.f;
     float pdfW = 0.f;
     switch (cur.type) {
     case VertexType::Camera: {
@@ -30,7 +29,7 @@ float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVerte
     case VertexType::Surface: {
         if (!prev) return 0.f;
         SurfaceBsdf bsdf(cur.bsdf, cur.ns, cur.ng);
-        Vec3f wo = glm::normalize(prev->p - cur.p);
+        Vec3f wo = directionTo(cur, *prev);
         pdfW = bsdf.pdfFwdW(wo, wi);
         break;
     }
@@ -41,33 +40,40 @@ float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVerte
 float pdfLightOriginA(const RenderContext& ctx, const PathVertex& v) {
     if (v.lightIndex == kInvalidId) return 0.f;
     float pdfPosA, pdfDirW;
+    if (v.atInfinity) {
+        // The direction is the infinite light's "origin" (pbrt-v3 §16.3.1, InfiniteLightDensity).
+        ctx.scene.lights().pdfEmission(v.lightIndex, Vec3f(0.f), -v.ng, pdfPosA, pdfDirW);
+        return pdfDirW;
+    }
     ctx.scene.lights().pdfEmission(v.lightIndex, v.ng, v.ng, pdfPosA, pdfDirW);
     return pdfPosA;
 }
 
 float pdfLightDirectionA(const RenderContext& ctx, const PathVertex& v, const PathVertex& next) {
-    if (v.lightIndex == kInvalidId) return 0.f;
-    Vec3f w = next.p - v.p;
-    float len = glm::length(w);
-    if (!(len > 0.f)) return 0.f;
+    if (v.lightIndex == kInvalidId || next.atInfinity) return 0.f;
+    const LightSet& lights = ctx.scene.lights();
+    if (v.atInfinity) {
+        // The origin on the emission disk, seen at `next` through the cosine there: parallel rays
+        // have no 1/d² (pbrt-v3 §16.3.1, Vertex::PdfLight).
+        float pdfA = lights.diskPdfA();
+        return next.onSurface() ? pdfA * std::abs(glm::dot(next.ng, v.ng)) : pdfA;
+    }
+    Vec3f w = directionTo(v, next);
+    if (w == Vec3f(0.f)) return 0.f;
     float pdfPosA, pdfDirW;
-    ctx.scene.lights().pdfEmission(v.lightIndex, v.ng, w / len, pdfPosA, pdfDirW);
+    lights.pdfEmission(v.lightIndex, v.ng, w, pdfPosA, pdfDirW);
     return convertDensity(pdfDirW, v, next);
 }
 
 Rgb evalVertex(const RenderContext& ctx, const PathVertex& v, const PathVertex& next, TransportMode mode) {
-    Vec3f w = next.p - v.p;
-    float len = glm::length(w);
-    if (!(len > 0.f)) return Rgb(0.f);
-    w /= len;
+    Vec3f w = directionTo(v, next);
+    if (w == Vec3f(0.f)) return Rgb(0.f);
     switch (v.type) {
     case VertexType::Camera:
         return Rgb(ctx.camera.importance(v.p, w));
-    case VertexType::Light: {
-        const LightSet& lights = ctx.scene.lights();
-        if (lights.isDeltaPosition(v.lightIndex)) return lights.light(v.lightIndex).Le;  // intensity
-        return lights.emitted(v.lightIndex, v.ng, w);
-    }
+    case VertexType::Light:
+        // Radiance (area lights), intensity towards w (point, spot lights).
+        return ctx.scene.lights().emitted(v.lightIndex, v.ng, w);
     case VertexType::Surface: {
         SurfaceBsdf bsdf(v.bsdf, v.ns, v.ng);
         return bsdf.eval(v.woWorld, w, mode);
@@ -77,7 +83,9 @@ Rgb evalVertex(const RenderContext& ctx, const PathVertex& v, const PathVertex& 
 }
 
 Rgb emittedAt(const RenderContext& ctx, const PathVertex& v) {
-    if (v.type != VertexType::Surface || v.lightIndex == kInvalidId) return Rgb(0.f);
+    if (v.lightIndex == kInvalidId) return Rgb(0.f);
+    if (v.type == VertexType::Light && v.atInfinity) return ctx.scene.lights().environmentLe(v.ng);
+    if (v.type != VertexType::Surface) return Rgb(0.f);
     return ctx.scene.lights().emitted(v.lightIndex, v.ng, v.woWorld);
 }
 
@@ -95,17 +103,28 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         Hit hit;
         // The camera ray (a camera subpath's first segment) follows its neighbours: the coherent kernel.
         bool cameraRay = mode == TransportMode::Radiance && out.size() == 1;
-        if (!(cameraRay ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) break;
-        SurfaceInteraction si = scene.interaction(ray, hit);
+        bool found = cameraRay ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit);
         PathVertex v;
-        v.type = VertexType::Surface;
-        v.p = si.p;
-        v.ng = si.ng;
-        v.ns = si.ns;
-        v.woWorld = -glm::normalize(ray.d);
+        if (found) {
+            SurfaceInteraction si = scene.interaction(ray, hit);
+            v.type = VertexType::Surface;
+            v.p = si.p;
+            v.ng = si.ng;
+            v.ns = si.ns;
+            v.woWorld = -glm::normalize(ray.d);
+            v.bsdf = scene.bsdfParams(si);
+            v.lightIndex = si.lightIndex;
+        } else {
+            // A camera ray that escapes reaches the environment: the sub-path ends with a vertex at
+            // infinity, the s = 0 strategy's emitter (pbrt-v3 §16.3.2). Light sub-paths just end.
+            if (mode != TransportMode::Radiance || !scene.lights().hasEnvironment()) break;
+            v.type = VertexType::Light;
+            v.atInfinity = true;
+            v.ng = v.ns = glm::normalize(ray.d);
+            v.p = ray.o + (2.f * scene.lights().sceneRadius() + glm::length(ray.o - scene.lights().sceneCenter())) * v.ng;
+            v.lightIndex = scene.lights().environmentIndex();
+        }
         v.beta = beta;
-        v.bsdf = scene.bsdfParams(si);
-        v.lightIndex = si.lightIndex;
         // Densities are evaluated from the vertex positions rather than taken from the sampling
         // routine: the connection code evaluates them the same way, so every strategy sees exactly
         // the same p→/p← for a vertex and the weights sum to one to rounding (grazing cosine-
@@ -117,7 +136,7 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         // from `prev` given `v` (Veach's p←), i.e. pdfRevA of out[n − 2].
         if (n >= 2) out[n - 2].pdfRevA = prev.delta ? 0.f : pdfNextA(ctx, &v, prev, out[n - 2]);
         out.push_back(v);
-        if (int(out.size()) >= limit) break;
+        if (!found || int(out.size()) >= limit) break;
 
         PathVertex& cur = out.back();
         SurfaceBsdf bsdf(cur.bsdf, cur.ns, cur.ng);
@@ -166,15 +185,20 @@ void traceLightSubpath(const RenderContext& ctx, Sampler& sampler, int maxVertic
     PathVertex y0;
     y0.type = VertexType::Light;
     y0.p = le.p;
-    y0.ng = y0.ns = le.n;
+    y0.ng = y0.ns = le.isInfinite ? -le.dir : le.n;
+    y0.atInfinity = le.isInfinite;
     y0.lightIndex = le.index;
-    // y0 carries 1/pdfPosA; its "f" towards the next vertex is the emitted radiance (intensity).
+    // y0 carries 1/pdfPosA; its "f" towards the next vertex is the emitted radiance (intensity). An
+    // infinite light's origin density is that of its direction (pdfLightOriginA); its y0 is never
+    // connected (not connectible), so its beta is unused.
     y0.beta = Rgb(1.f / le.pdfPosA);
-    y0.pdfFwdA = le.pdfPosA;
+    y0.pdfFwdA = le.isInfinite ? le.pdfDirW : le.pdfPosA;
     out.push_back(y0);
-    float cosLight = le.isDeltaPos ? 1.f : std::abs(glm::dot(le.n, le.dir));
+    // Infinite lights: the ray leaves the disk along the direction, cos = 1, and β = L / (pdfPos ·
+    // pdfDir) is the radiance through the disk's area per unit solid angle (pbrt-v3 §16.3.1).
+    float cosLight = le.isDeltaPos || le.isInfinite ? 1.f : std::abs(glm::dot(le.n, le.dir));
     Rgb beta = le.Le * (cosLight / (le.pdfPosA * le.pdfDirW));
-    Ray ray = le.isDeltaPos ? Ray{le.p, le.dir, 0.f, kInfinity} : spawnRay(le.p, le.n, le.dir);
+    Ray ray = le.isDeltaPos || le.isInfinite ? Ray{le.p, le.dir, 0.f, kInfinity} : spawnRay(le.p, le.n, le.dir);
     randomWalk(ctx, ray, beta, sampler, TransportMode::Importance, maxVertices, out);
 }
 

@@ -8,6 +8,10 @@
 ///    other way (filled in once the successor exists, and again for the connection).
 /// A vertex reached after a delta scattering event stores 0 for densities that contain the delta;
 /// the MIS code remaps them to 1 (the deltas cancel in the ratios, Veach 1997, §10.3.5).
+/// Vertices "at infinity" (a light sub-path starting at the environment or a directional light, a
+/// camera sub-path escaping to the environment) have a direction, not a position: densities towards
+/// them stay in solid angle, and the density of the first vertex after one is the planar density of
+/// the emission disk times the cosine there, with no distance (pbrt-v3 §16.3.1's infinite lights).
 #include <vector>
 
 #include "integrators/integrator.h"
@@ -21,48 +25,66 @@ enum class VertexType : uint8_t { Camera, Light, Surface };
 struct PathVertex {
     VertexType type = VertexType::Surface;
     Vec3f p{0.f};
-    Vec3f ng{0.f};       ///< geometric normal (surfaces), emitter normal (area lights), view axis (camera); 0 for point lights
+    Vec3f ng{0.f};       ///< geometric normal (surfaces), emitter normal (area lights), view axis (camera); 0 for point
+                         ///< and spot lights; for a vertex at infinity the unit direction towards it (from the scene)
     Vec3f ns{0.f};       ///< shading normal (surfaces; = ng otherwise)
     Vec3f woWorld{0.f};  ///< unit direction towards the previous vertex of its own sub-path (surfaces)
     Rgb beta{0.f};       ///< sub-path throughput up to this vertex (Veach's α, eq. 10.4/10.5)
     BsdfParams bsdf;     ///< the BSDF inputs at p (textures resolved), for surface vertices
     uint32_t lightIndex = kInvalidId;  ///< light vertex: its light; surface vertex: the emitter it lies on, if any
     bool delta = false;  ///< scattered by a delta BSDF here (cannot be a connection end)
-    float pdfFwdA = 0.f;
+    bool atInfinity = false;  ///< an infinite light's vertex (environment, directional): `ng` is its direction
+    float pdfFwdA = 0.f;  ///< area density; solid angle for a vertex at infinity
     float pdfRevA = 0.f;
 
     /// True where densities convert with the cosine at the vertex: surfaces and area-light points.
-    bool onSurface() const { return type == VertexType::Surface || (type == VertexType::Light && ng != Vec3f(0.f)); }
+    bool onSurface() const {
+        return type == VertexType::Surface || (type == VertexType::Light && !atInfinity && ng != Vec3f(0.f));
+    }
     /// The normal used to offset shadow-ray ends (zero: no surface to leave, e.g. the lens, a point light).
     Vec3f offsetNormal() const { return type == VertexType::Camera ? Vec3f(0.f) : ng; }
-    /// True when this vertex can end a connection edge (Veach's "connectible").
-    bool connectible() const { return !delta; }
+    /// True when this vertex can end a connection edge (Veach's "connectible"). A vertex at infinity
+    /// is only ever reached by its own sub-path's direction (s = 0) or resampled (s = 1).
+    bool connectible() const { return !delta && !atInfinity; }
 };
 
+/// Unit direction from vertex `a` towards vertex `b`, exact for vertices at infinity; zero when they coincide.
+inline Vec3f directionTo(const PathVertex& a, const PathVertex& b) {
+    if (b.atInfinity) return b.ng;
+    if (a.atInfinity) return -a.ng;
+    Vec3f w = b.p - a.p;
+    float len = glm::length(w);
+    return len > 0.f ? w / len : Vec3f(0.f);
+}
+
 /// Converts a solid-angle density at `from` into an area density at `to`: pdfW · |cos θ_to| / d²
-/// (Veach 1997, eq. 8.10); no cosine when `to` is not on a surface.
+/// (Veach 1997, eq. 8.10); no cosine when `to` is not on a surface; unchanged when `to` is at infinity.
 float convertDensity(float pdfW, const PathVertex& from, const PathVertex& to);
 
 /// Area density at `next` of `cur` sampling `next`, given that `cur` was reached from `prev`
 /// (ignored for camera and light vertices): the BSDF, camera or light-emission direction density.
 float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next);
 /// For a vertex on an emitter (light vertex, or a surface vertex with lightIndex): pdfPosA of the
-/// light sub-path starting there (selection included).
+/// light sub-path starting there (selection included); for a vertex at infinity the solid-angle
+/// density of its direction (selection included).
 float pdfLightOriginA(const RenderContext& ctx, const PathVertex& v);
-/// For a vertex on an emitter: area density at `next` of the emitted direction towards `next`.
+/// For a vertex on an emitter: area density at `next` of the emitted direction towards `next`; for a
+/// vertex at infinity the emission disk's 1/(π r²) times the cosine at `next`.
 float pdfLightDirectionA(const RenderContext& ctx, const PathVertex& v, const PathVertex& next);
 
 /// The "f" of a vertex towards `next` in a connection: BSDF (adjoint for importance, with the
 /// shading correction), emitted radiance / intensity for light vertices, importance We for the camera.
 Rgb evalVertex(const RenderContext& ctx, const PathVertex& v, const PathVertex& next, TransportMode mode);
-/// Emitted radiance of a surface vertex lying on a light, towards its predecessor (s = 0 strategy).
+/// Emitted radiance of a surface vertex lying on a light, towards its predecessor, or of the
+/// environment a camera sub-path escaped to (s = 0 strategy).
 Rgb emittedAt(const RenderContext& ctx, const PathVertex& v);
 
 /// Upper bound on sub-path vertices: a guard against lossless mirror boxes, never reached in practice
 /// (Russian roulette ends paths; a path that long carries a negligible weight).
 inline constexpr int kMaxSubpathVertices = 1024;
 
-/// Traces the camera sub-path through `raster`: z0 (lens) then surface vertices (radiance transport).
+/// Traces the camera sub-path through `raster`: z0 (lens) then surface vertices (radiance transport),
+/// ending with a vertex at infinity when a ray escapes a scene that has an environment.
 /// At most `maxVertices` vertices (−1: unlimited, Russian roulette ends it).
 void traceCameraSubpath(const RenderContext& ctx, Vec2f raster, Sampler& sampler, int maxVertices, std::vector<PathVertex>& out);
 /// Traces a light sub-path: y0 on a light (picked ∝ power), then surface vertices (importance transport).

@@ -18,7 +18,11 @@ Rgb PtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler&
     for (int depth = 0;; ++depth) {
         Hit hit;
         // Camera rays follow their neighbours (tiles in pixel order): the coherent kernel.
-        if (!(depth == 0 ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) break;
+        if (!(depth == 0 ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) {
+            // An escaping ray sees the environment (zero without one).
+            if (scene.lights().hasEnvironment()) L += beta * scene.lights().environmentLe(glm::normalize(ray.d));
+            break;
+        }
         SurfaceInteraction si = scene.interaction(ray, hit);
         Vec3f wo = -glm::normalize(ray.d);
         if (si.lightIndex != kInvalidId) L += beta * scene.lights().emitted(si.lightIndex, si.ng, wo);

@@ -45,9 +45,7 @@ void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, cons
     NextEventSample ne;
     if (!sampleNextEvent(ctx.scene.lights(), si.p, si.ng, wo, sampler, ne)) return;
     const LightSample& ls = ne.light;
-    Vec3f toLight = ls.p - ne.pRef;
-    float dist = glm::length(toLight);
-    Vec3f wi = toLight / dist;
+    const Vec3f wi = ls.wi;
     SampleTrace* trace = ctx.trace;
     if (trace) [[unlikely]] {
         // Recomputing the BSDF density draws no random numbers: the path is unchanged.
@@ -57,16 +55,33 @@ void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, cons
     }
     // Reflection-only BSDFs: wi must leave on wo's side of the *geometric* surface, or a shading
     // normal would let light through (Veach 1997, §5.3).
-    if (!(dist > 0.f && glm::dot(wi, si.ng) * glm::dot(wo, si.ng) > 0.f)) return;
+    if (!(glm::dot(wi, si.ng) * glm::dot(wo, si.ng) > 0.f)) return;
     float bsdfPdfW;
     Rgb f = bsdf.evalWithPdf(wo, wi, TransportMode::Radiance, bsdfPdfW) * std::abs(glm::dot(wi, bsdf.ns()));
     if (isBlack(f) || !lightVisible(ctx.accel, si.p, si.ng, ls)) return;
-    // A point light cannot be hit by BSDF sampling: light sampling is its only strategy.
+    // A delta light (point, spot, directional) cannot be hit by BSDF sampling: light sampling is its
+    // only strategy.
     float w = ls.isDelta ? 1.f : powerHeuristic(ls.pdfW, bsdfPdfW);
     L += beta * f * ls.Le * (w / ls.pdfW);
     if (trace) [[unlikely]] {
         trace->add("lightMisW", w);
         trace->add("lightContribution", beta * f * ls.Le * (w / ls.pdfW));
+    }
+}
+
+/// The environment reached by a BSDF-sampled ray that escaped: weighted against sampling the
+/// environment directly (its importance-sampled direction density at the previous vertex).
+void addEscapedEnvironment(const RenderContext& ctx, const Vec3f& wLight, const Rgb& beta, bool deltaBounce, float prevPdfW,
+                           Rgb& L) {
+    const LightSet& lights = ctx.scene.lights();
+    Rgb Le = lights.environmentLe(wLight);
+    if (isBlack(Le)) return;
+    float w = deltaBounce ? 1.f : powerHeuristic(prevPdfW, lights.environmentPdfW(wLight));
+    L += beta * Le * w;
+    if (SampleTrace* trace = ctx.trace) [[unlikely]] {
+        trace->add("environmentLe", Le);
+        trace->add("emissionMisW", w);
+        trace->add("emissionContribution", beta * Le * w);
     }
 }
 
@@ -78,6 +93,8 @@ void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, cons
 //    sum to 1 for every light path both can produce, so the combination is unbiased (Veach eq. 9.9
 //    with the weights' partition of unity, Theorem 9.2). Emission reached through a delta bounce
 //    (mirror, glass) or seen directly from the camera can only come from BSDF sampling: weight 1.
+//    The environment is one more emitter: an escaping BSDF ray finds it, light sampling picks its
+//    directions by luminance; delta lights (point, spot, directional) only light sampling finds.
 //  * Throughput β is the product of f·|cos|/pdf of the sampled directions: the standard
 //    Monte Carlo estimator of the path-integral terms (Veach 1997 eq. 8.19).
 //  * Russian roulette divides β by the survival probability (integrators/russian_roulette.h).
@@ -94,7 +111,10 @@ Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampl
     for (int depth = 0;; ++depth) {
         Hit hit;
         // Camera rays follow their neighbours (tiles in pixel order): the coherent kernel.
-        if (!(depth == 0 ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) break;
+        if (!(depth == 0 ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) {
+            if (scene.lights().hasEnvironment()) addEscapedEnvironment(ctx, glm::normalize(ray.d), beta, deltaBounce, prevPdfW, L);
+            break;
+        }
         SurfaceInteraction si = scene.interaction(ray, hit);
         Vec3f wo = -glm::normalize(ray.d);
         SampleTrace* trace = ctx.trace;

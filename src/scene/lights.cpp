@@ -20,11 +20,25 @@ constexpr float kSmallConeSin2 = 0.00068523f;
 }
 
 void LightSet::build(const SceneGeometry& geometry, const std::vector<Material>& materials,
-                     const std::vector<PointLightDesc>& pointLights) {
+                     const std::vector<PointLightDesc>& pointLights, const std::vector<SpotLightDesc>& spotLights,
+                     const std::vector<DirectionalLightDesc>& directionalLights, const EnvironmentDesc* environment) {
     geometry_ = &geometry;
     lights_.clear();
+    environmentIndex_ = kInvalidId;
     meshFirstLight_.assign(geometry.meshes.size(), kInvalidId);
     sphereLight_.assign(geometry.spheres.size(), kInvalidId);
+
+    // The scene's bounding sphere (of the geometry, as pbrt's): infinite lights emit from a disk of
+    // its radius and their power is measured through it. Padded so that the disk's rays start
+    // strictly outside every primitive.
+    Bounds3f bounds;
+    for (const TriangleMesh& mesh : geometry.meshes)
+        for (const Vec3f& p : mesh.positions) bounds.extend(p);
+    for (const Sphere& s : geometry.spheres) bounds.extend(sphereBounds(s));
+    sceneCenter_ = bounds.empty() ? Vec3f(0.f) : bounds.center();
+    sceneRadius_ = bounds.empty() ? 1.f : 0.5f * glm::length(bounds.diagonal());
+    sceneRadius_ = std::max(sceneRadius_ * 1.01f, 1e-3f);
+
     std::vector<float> power;
     for (uint32_t g = 0; g < geometry.meshes.size(); ++g) {
         const TriangleMesh& mesh = geometry.meshes[g];
@@ -59,18 +73,37 @@ void LightSet::build(const SceneGeometry& geometry, const std::vector<Material>&
         lights_.push_back(l);
         power.push_back(luminance(pl.intensity) * 4.f * kPi);  // Φ = 4π I for an isotropic point source
     }
-    double total = 0.0;
-    for (float p : power) total += std::max(0.f, p);
-    pmf_.assign(lights_.size(), 0.f);
-    cdf_.assign(lights_.size(), 0.f);
-    double acc = 0.0;
-    for (size_t i = 0; i < lights_.size(); ++i) {
-        double p = total > 0.0 ? std::max(0.f, power[i]) / total : 1.0 / double(lights_.size());
-        pmf_[i] = float(p);
-        acc += p;
-        cdf_[i] = float(acc);
+    for (const SpotLightDesc& sl : spotLights) {
+        Light l;
+        l.type = LightType::Spot;
+        l.Le = sl.intensity;
+        l.position = sl.position;
+        l.direction = glm::normalize(sl.direction);
+        l.cosInner = std::cos(sl.innerConeAngle);
+        l.cosOuter = std::cos(sl.outerConeAngle);
+        lights_.push_back(l);
+        // Φ = I ∫ falloff dω = 2π I [(1 − cos inner) + (cos inner − cos outer) / 3]: the falloff t²
+        // is quadratic in cos θ, so its integral over the transition band is a third of the band.
+        power.push_back(luminance(sl.intensity) * 2.f * kPi * ((1.f - l.cosInner) + (l.cosInner - l.cosOuter) / 3.f));
     }
-    if (!cdf_.empty()) cdf_.back() = 1.f;
+    const float diskArea = kPi * sceneRadius_ * sceneRadius_;
+    for (const DirectionalLightDesc& dl : directionalLights) {
+        Light l;
+        l.type = LightType::Directional;
+        l.Le = dl.irradiance;
+        l.direction = glm::normalize(dl.direction);
+        lights_.push_back(l);
+        power.push_back(luminance(dl.irradiance) * diskArea);  // Φ = π r² E through the scene's disk
+    }
+    if (environment) {
+        environment_.build(*environment);
+        environmentIndex_ = uint32_t(lights_.size());
+        Light l;
+        l.type = LightType::Environment;
+        lights_.push_back(l);
+        power.push_back(float(environment_.luminanceIntegral() * diskArea));  // Φ = π r² ∫ L dω (pbrt-v4)
+    }
+    selection_ = Distribution1D(power);
 }
 
 uint32_t LightSet::lightIndexOf(uint32_t geomId, uint32_t primId) const {
@@ -82,16 +115,31 @@ uint32_t LightSet::lightIndexOf(uint32_t geomId, uint32_t primId) const {
     return kInvalidId;
 }
 
+Rgb LightSet::intensityTowards(const Light& l, const Vec3f& w) const {
+    if (l.type == LightType::Point) return l.Le;
+    return l.Le * spotFalloff(glm::dot(l.direction, w), l.cosInner, l.cosOuter);
+}
+
 Rgb LightSet::emitted(uint32_t index, const Vec3f& n, const Vec3f& w) const {
     const Light& l = lights_[index];
-    return (l.twoSided || glm::dot(n, w) > 0.f) ? l.Le : Rgb(0.f);
+    switch (l.type) {
+    case LightType::Triangle:
+    case LightType::Sphere: return (l.twoSided || glm::dot(n, w) > 0.f) ? l.Le : Rgb(0.f);
+    case LightType::Point:
+    case LightType::Spot: return intensityTowards(l, w);
+    case LightType::Directional: return l.Le;
+    case LightType::Environment: return environment_.Le(-w);
+    }
+    return Rgb(0.f);
+}
+
+float LightSet::environmentPdfW(const Vec3f& wLight) const {
+    return hasEnvironment() ? selection_.pmf(environmentIndex_) * environment_.pdfW(wLight) : 0.f;
 }
 
 uint32_t LightSet::pick(float uPick) const {
-    uint32_t index = uint32_t(std::upper_bound(cdf_.begin(), cdf_.end(), uPick) - cdf_.begin());
-    index = std::min<uint32_t>(index, uint32_t(lights_.size() - 1));
-    while (pmf_[index] == 0.f && index > 0) --index;  // uPick landed on a zero-power entry's edge
-    return pmf_[index] == 0.f ? kInvalidId : index;
+    uint32_t index = selection_.sampleDiscrete(uPick);
+    return selection_.pmf(index) == 0.f ? kInvalidId : index;
 }
 
 bool LightSet::sample(const Vec3f& ref, float uPick, Vec2f u, LightSample& out) const {
@@ -100,7 +148,11 @@ bool LightSet::sample(const Vec3f& ref, float uPick, Vec2f u, LightSample& out) 
     if (index == kInvalidId) return false;
     out.index = index;
     const Light& l = lights_[index];
-    if (l.type == LightType::Point) {
+    const float pmf = selection_.pmf(index);
+    out.isInfinite = false;
+    switch (l.type) {
+    case LightType::Point:
+    case LightType::Spot: {
         // Delta position: the "density" is the discrete selection probability and the incident
         // radiance integrates to the irradiance I / d² (inverse-square law).
         out.p = l.position;
@@ -108,17 +160,57 @@ bool LightSet::sample(const Vec3f& ref, float uPick, Vec2f u, LightSample& out) 
         Vec3f d = l.position - ref;
         float dist2 = glm::dot(d, d);
         if (!(dist2 > 0.f)) return false;
-        out.Le = l.Le / dist2;
-        out.pdfW = pmf_[index];
+        out.wi = d / std::sqrt(dist2);
+        out.Le = intensityTowards(l, -out.wi) / dist2;
+        out.pdfW = pmf;
         out.isDelta = true;
         return true;
     }
+    case LightType::Directional:
+    case LightType::Environment: {
+        float pdfW = 1.f;
+        out.wi = l.type == LightType::Directional ? -l.direction : environment_.sample(u, pdfW);
+        out.Le = l.type == LightType::Directional ? l.Le : environment_.Le(out.wi);
+        out.pdfW = pmf * pdfW;
+        out.isDelta = l.type == LightType::Directional;
+        out.isInfinite = true;
+        out.n = Vec3f(0.f);
+        out.p = ref + (2.f * sceneRadius_ + glm::length(ref - sceneCenter_)) * out.wi;
+        return out.pdfW > 0.f;
+    }
+    case LightType::Triangle:
+    case LightType::Sphere: break;
+    }
     float pdfW = sampleOne(index, ref, u, out);
     if (!(pdfW > 0.f) || !std::isfinite(pdfW)) return false;
-    out.pdfW = pdfW * pmf_[index];
+    out.pdfW = pdfW * pmf;
     out.isDelta = false;
-    out.Le = emitted(index, out.n, glm::normalize(ref - out.p));
+    Vec3f d = out.p - ref;
+    float len = glm::length(d);
+    if (!(len > 0.f)) return false;
+    out.wi = d / len;
+    out.Le = emitted(index, out.n, -out.wi);
     return true;
+}
+
+bool LightSet::sampleInfiniteEmission(uint32_t index, Vec2f uPos, Vec2f uDir, LightEmission& out) const {
+    // Direction first, then the origin on the disk of radius r through the scene's centre
+    // perpendicular to it, moved r towards the light so the ray starts outside the scene
+    // (pbrt-v4 §12.5 ImageInfiniteLight::SampleLe; Veach 1997 §10.2 for the densities).
+    const Light& l = lights_[index];
+    float pdfDirW = 1.f;
+    Vec3f wLight = l.type == LightType::Directional ? -l.direction : environment_.sample(uDir, pdfDirW);
+    Frame frame(wLight);
+    Vec2f disk = sampleConcentricDisk(uPos);
+    out.p = sceneCenter_ + sceneRadius_ * (disk.x * frame.s + disk.y * frame.t + wLight);
+    out.n = Vec3f(0.f);
+    out.dir = -wLight;
+    out.Le = l.type == LightType::Directional ? l.Le : environment_.Le(wLight);
+    out.pdfPosA = diskPdfA();
+    out.pdfDirW = selection_.pmf(index) * pdfDirW;
+    out.isDeltaPos = false;
+    out.isInfinite = true;
+    return out.pdfDirW > 0.f;
 }
 
 bool LightSet::sampleEmission(float uPick, Vec2f uPos, Vec2f uDir, LightEmission& out) const {
@@ -127,15 +219,28 @@ bool LightSet::sampleEmission(float uPick, Vec2f uPos, Vec2f uDir, LightEmission
     if (index == kInvalidId) return false;
     const Light& l = lights_[index];
     out.index = index;
-    if (l.type == LightType::Point) {
+    out.isInfinite = false;
+    switch (l.type) {
+    case LightType::Point:
+    case LightType::Spot:
         out.p = l.position;
         out.n = Vec3f(0.f);
-        out.dir = sampleUniformSphere(uDir);
-        out.Le = l.Le;
-        out.pdfPosA = pmf_[index];
-        out.pdfDirW = kUniformSpherePdfW;
+        if (l.type == LightType::Point) {
+            out.dir = sampleUniformSphere(uDir);
+        } else {
+            // Uniform in the outer cone (pbrt-v4 SpotLight::SampleLe); the falloff weights the ray.
+            float cosTheta = 1.f - uDir.x * (1.f - l.cosOuter);
+            float sinTheta = safeSqrt(1.f - cosTheta * cosTheta), phi = 2.f * kPi * uDir.y;
+            out.dir = glm::normalize(Frame(l.direction).toWorld(Vec3f(sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta)));
+        }
+        out.Le = intensityTowards(l, out.dir);
         out.isDeltaPos = true;
-        return true;
+        pdfEmission(index, out.n, out.dir, out.pdfPosA, out.pdfDirW);
+        return out.pdfDirW > 0.f;
+    case LightType::Directional:
+    case LightType::Environment: return sampleInfiniteEmission(index, uPos, uDir, out);
+    case LightType::Triangle:
+    case LightType::Sphere: break;
     }
     if (l.type == LightType::Triangle) {
         samplePointOnTriangle(geometry_->meshes[l.geomId], l.primId, uPos, out.p, out.n);
@@ -168,19 +273,37 @@ bool LightSet::sampleEmission(float uPick, Vec2f uPos, Vec2f uDir, LightEmission
 
 void LightSet::pdfEmission(uint32_t index, const Vec3f& n, const Vec3f& dir, float& pdfPosA, float& pdfDirW) const {
     const Light& l = lights_[index];
-    if (l.type == LightType::Point) {
-        pdfPosA = pmf_[index];
+    const float pmf = selection_.pmf(index);
+    switch (l.type) {
+    case LightType::Point:
+        pdfPosA = pmf;
         pdfDirW = kUniformSpherePdfW;
         return;
+    case LightType::Spot:
+        pdfPosA = pmf;
+        pdfDirW = glm::dot(dir, l.direction) >= l.cosOuter ? 1.f / (2.f * kPi * (1.f - l.cosOuter)) : 0.f;
+        return;
+    case LightType::Directional:
+        pdfPosA = diskPdfA();
+        pdfDirW = pmf;  // a delta in direction: only the selection is a density
+        return;
+    case LightType::Environment:
+        pdfPosA = diskPdfA();
+        pdfDirW = pmf * environment_.pdfW(-dir);
+        return;
+    case LightType::Triangle:
+    case LightType::Sphere: break;
     }
-    pdfPosA = l.area > 0.f ? pmf_[index] / l.area : 0.f;
+    pdfPosA = l.area > 0.f ? pmf / l.area : 0.f;
     float c = glm::dot(n, dir);
     if (l.twoSided) pdfDirW = 0.5f * std::abs(c) * kInvPi;
     else pdfDirW = c > 0.f ? c * kInvPi : 0.f;
 }
 
 float LightSet::pdfW(uint32_t index, const Vec3f& ref, const Vec3f& pLight, const Vec3f& nLight) const {
-    return pmf_[index] * pdfOneW(index, ref, pLight, nLight);
+    const Light& l = lights_[index];
+    if (l.type == LightType::Environment) return environmentPdfW(glm::normalize(pLight - ref));
+    return selection_.pmf(index) * pdfOneW(index, ref, pLight, nLight);
 }
 
 float LightSet::sampleOne(uint32_t index, const Vec3f& ref, Vec2f u, LightSample& out) const {
@@ -226,7 +349,7 @@ float LightSet::sampleOne(uint32_t index, const Vec3f& ref, Vec2f u, LightSample
 
 float LightSet::pdfOneW(uint32_t index, const Vec3f& ref, const Vec3f& pLight, const Vec3f& nLight) const {
     const Light& l = lights_[index];
-    if (l.type == LightType::Point) return 0.f;  // a delta light is never hit by a ray
+    if (isDelta(index)) return 0.f;  // a delta light is never hit by a ray
     if (l.type == LightType::Sphere) {
         const Sphere& s = geometry_->spheres[l.primId];
         Vec3d toCenter = Vec3d(s.center) - Vec3d(ref);

@@ -4,10 +4,13 @@
 
 namespace tessera {
 
-void Scene::finalize() { lights_.build(geometry, materials, pointLights); }
+void Scene::finalize() {
+    lights_.build(geometry, materials, pointLights, spotLights, directionalLights, environment ? &*environment : nullptr);
+}
 
 Scene::Scene(Scene&& o) noexcept
-    : geometry(std::move(o.geometry)), materials(std::move(o.materials)), images(std::move(o.images)), pointLights(std::move(o.pointLights)), camera(std::move(o.camera)),
+    : geometry(std::move(o.geometry)), materials(std::move(o.materials)), images(std::move(o.images)), pointLights(std::move(o.pointLights)),
+      spotLights(std::move(o.spotLights)), directionalLights(std::move(o.directionalLights)), environment(std::move(o.environment)), camera(std::move(o.camera)),
       settings(std::move(o.settings)), sourcePath(std::move(o.sourcePath)), lights_(std::move(o.lights_)) {
     lights_.rebind(geometry);
 }
@@ -17,6 +20,9 @@ Scene& Scene::operator=(Scene&& o) noexcept {
     materials = std::move(o.materials);
     images = std::move(o.images);
     pointLights = std::move(o.pointLights);
+    spotLights = std::move(o.spotLights);
+    directionalLights = std::move(o.directionalLights);
+    environment = std::move(o.environment);
     camera = std::move(o.camera);
     settings = std::move(o.settings);
     sourcePath = std::move(o.sourcePath);

@@ -49,11 +49,14 @@ public:
     std::vector<Material> materials;
     std::vector<std::unique_ptr<Image>> images;  ///< decoded textures; materials and alpha masks point into them
     std::vector<PointLightDesc> pointLights;  ///< KHR_lights_punctual point lights (world space)
+    std::vector<SpotLightDesc> spotLights;    ///< KHR_lights_punctual spot lights (world space)
+    std::vector<DirectionalLightDesc> directionalLights;  ///< KHR_lights_punctual directional lights
+    std::optional<EnvironmentDesc> environment;           ///< TESSERA_environment or --env
     std::optional<CameraDesc> camera;
     RenderSettings settings;
     std::string sourcePath;  ///< the file it was loaded from (for messages and metadata)
 
-    /// Builds the light set; call once after geometry and materials are final.
+    /// Builds the light set; call after geometry and materials are final (again after changing lights).
     void finalize();
     const LightSet& lights() const { return lights_; }
 
