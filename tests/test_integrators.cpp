@@ -225,23 +225,40 @@ TEST(IntegratorAgreement, ShadingNormalsDoNotSplitRadianceAndImportanceTransport
     }
 }
 
-TEST(PointLights, KhrLightsPunctualPointLightIsLoadedAsRadiantIntensity) {
+TEST(PointLights, KhrLightsPunctualLightsAreLoadedInTheirUnits) {
     std::string dir = test::tempDir("point-light").string();
     std::string path = dir + "/point.gltf";
+    // Node 1 turns −Z (the spot's axis) to −Y: a rotation of −90° about +X.
     std::ofstream(path) << R"({"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_lights_punctual"],
       "extensions": {"KHR_lights_punctual": {"lights": [
         {"type": "point", "color": [1.0, 0.5, 0.25], "intensity": 8.0},
-        {"type": "spot", "intensity": 3.0, "spot": {}}]}},
-      "scenes": [{"nodes": [0, 1]}], "scene": 0,
+        {"type": "spot", "intensity": 3.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}},
+        {"type": "directional", "color": [0.5, 1.0, 1.0], "intensity": 4.0},
+        {"type": "area", "intensity": 1.0}]}},
+      "scenes": [{"nodes": [0, 1, 2, 3]}], "scene": 0,
       "nodes": [{"translation": [1, 2, 3], "extensions": {"KHR_lights_punctual": {"light": 0}}},
-                {"extensions": {"KHR_lights_punctual": {"light": 1}}}]})";
+                {"translation": [0, 5, 0], "rotation": [-0.7071067811865476, 0, 0, 0.7071067811865476],
+                 "extensions": {"KHR_lights_punctual": {"light": 1}}},
+                {"extensions": {"KHR_lights_punctual": {"light": 2}}},
+                {"extensions": {"KHR_lights_punctual": {"light": 3}}}]})";
     std::vector<std::string> warnings;
     Scene scene = loadGltfScene(path, warnings);
     ASSERT_EQ(scene.pointLights.size(), 1u);
     EXPECT_EQ(scene.pointLights[0].position, Vec3f(1.f, 2.f, 3.f));
-    EXPECT_EQ(scene.pointLights[0].intensity, Rgb(8.f, 4.f, 2.f));
-    ASSERT_EQ(scene.lights().size(), 1u);
+    EXPECT_EQ(scene.pointLights[0].intensity, Rgb(8.f, 4.f, 2.f));  // candela → W/sr 1:1
+    ASSERT_EQ(scene.spotLights.size(), 1u);
+    EXPECT_EQ(scene.spotLights[0].position, Vec3f(0.f, 5.f, 0.f));
+    EXPECT_NEAR(scene.spotLights[0].direction.y, -1.f, 1e-6f);
+    EXPECT_EQ(scene.spotLights[0].intensity, Rgb(3.f));
+    EXPECT_FLOAT_EQ(scene.spotLights[0].innerConeAngle, 0.2f);
+    EXPECT_FLOAT_EQ(scene.spotLights[0].outerConeAngle, 0.5f);
+    ASSERT_EQ(scene.directionalLights.size(), 1u);
+    EXPECT_EQ(scene.directionalLights[0].direction, Vec3f(0.f, 0.f, -1.f));
+    EXPECT_EQ(scene.directionalLights[0].irradiance, Rgb(2.f, 4.f, 4.f));  // lux → W/m² 1:1
+    ASSERT_EQ(scene.lights().size(), 3u);
     EXPECT_TRUE(scene.lights().isDeltaPosition(0));
-    ASSERT_EQ(warnings.size(), 1u);  // the spot light is ignored with a warning
-    EXPECT_NE(warnings[0].find("spot"), std::string::npos);
+    EXPECT_TRUE(scene.lights().isDeltaPosition(1));
+    EXPECT_TRUE(scene.lights().isDelta(2) && scene.lights().isInfinite(2));
+    ASSERT_EQ(warnings.size(), 1u);  // the unknown light type is ignored with a warning
+    EXPECT_NE(warnings[0].find("area"), std::string::npos);
 }

@@ -34,6 +34,8 @@ struct RenderArgs {
     std::string scene, output, png, resolution, integrator, accel, lookAt, display = "sRGB", view = "Standard";
     std::string bdptStrategies;  ///< directory for the per-strategy debug images (empty: none)
     std::string debugPixel;  ///< "x,y,s": replay one sample with a trace instead of rendering
+    std::string env;                     ///< --env FILE|R,G,B: replaces the scene's environment
+    std::optional<double> envRotate, envIntensity;
     int spp = 0, threads = 0;
     std::optional<int> maxDepth;  ///< --max-depth; unset: the scene's
     double timeLimit = 0.0, fovDeg = 0.0;
@@ -126,7 +128,7 @@ CheckpointHeader checkpointHeader(const RenderArgs& a, const RenderSettings& s, 
     for (int c = 0; c < 4; ++c)
         for (int r = 0; r < 4; ++r) camera += exact(cam.cameraToWorld[c][r]) + ",";
     camera += exact(cam.yfov) + "," + exact(cam.apertureRadius) + "," + exact(cam.focusDistance);
-    return {
+    CheckpointHeader header = {
         {"renderer", std::string("tessera ") + versionString() + " (" + gitRevision() + ")"},
         {"scene_hash", fnv1a64OfFile(a.scene)},
         {"integrator", std::string(integrator.name())},
@@ -137,6 +139,12 @@ CheckpointHeader checkpointHeader(const RenderArgs& a, const RenderSettings& s, 
         {"camera", camera},
         {"tile_size", std::to_string(tileSize)},
     };
+    // The command line's environment changes the pixels without changing the scene file.
+    if (!a.env.empty() || a.envRotate || a.envIntensity)
+        header.push_back({"environment", a.env + (a.env.empty() || !std::filesystem::exists(a.env) ? "" : " " + fnv1a64OfFile(a.env)) +
+                                             " rotate " + (a.envRotate ? std::to_string(*a.envRotate) : "-") + " intensity " +
+                                             (a.envIntensity ? std::to_string(*a.envIntensity) : "-")});
+    return header;
 }
 
 /// "x,y,s" → the sample to replay; checked against the image size.
@@ -164,10 +172,39 @@ void parseResolution(const std::string& text, int& width, int& height) {
     height = h;
 }
 
+/// `--env FILE|R,G,B [--env-rotate DEG] [--env-intensity S]`: replaces (or adjusts) the scene's
+/// environment light and rebuilds its light set. Rotation and intensity given alone adjust the
+/// scene's own environment.
+void applyEnvironmentOptions(const RenderArgs& a, Scene& scene) {
+    if (a.env.empty() && !a.envRotate && !a.envIntensity) return;
+    if (!a.env.empty()) {
+        EnvironmentDesc env;
+        bool isColor = a.env.find(',') != std::string::npos && !std::filesystem::exists(a.env);
+        if (isColor) {
+            std::vector<float> c = parseNumbers(a.env, "--env");
+            if (c.size() != 3 || !(c[0] >= 0.f && c[1] >= 0.f && c[2] >= 0.f) || !isFinite(Vec3f(c[0], c[1], c[2])))
+                throw InputError("--env: a colour must be three finite non-negative numbers R,G,B, got '" + a.env + "'");
+            env.color = Rgb(c[0], c[1], c[2]);
+            env.source = "constant " + a.env;
+        } else {
+            scene.images.push_back(readEnvironmentImage(a.env));
+            env.image = scene.images.back().get();
+            env.source = a.env;
+        }
+        scene.environment = env;
+    }
+    if (!scene.environment)
+        throw InputError("--env-rotate and --env-intensity need an environment: the scene has none, add --env FILE|R,G,B");
+    if (a.envRotate) scene.environment->rotationDeg = float(*a.envRotate);
+    if (a.envIntensity) scene.environment->intensity = float(*a.envIntensity);
+    scene.finalize();
+}
+
 /// The scene's render settings with the command line's overrides. The camera options change
 /// `scene.camera`; a scene without a camera needs --look-at.
 RenderSettings resolveSettings(const RenderArgs& a, Scene& scene) {
     RenderSettings s = scene.settings;
+    applyEnvironmentOptions(a, scene);
     if (!a.resolution.empty()) parseResolution(a.resolution, s.width, s.height);
     if (a.spp > 0) s.spp = a.spp;
     if (a.maxDepth) s.maxDepth = *a.maxDepth;
@@ -435,6 +472,11 @@ Runner addRenderCommand(CLI::App& app) {
     cmd->add_option("--bdpt-strategies", a->bdptStrategies,
                     "also write one EXR per BDPT strategy (s,t), weighted and unweighted, into this directory "
                     "(paths up to --max-depth + 2 vertices, 5 if unlimited; one extra render per image)");
+    cmd->add_option("--env", a->env,
+                    "environment light: an equirectangular HDR image (EXR, .hdr; centre = +X horizon, top = +Y) or a "
+                    "constant colour R,G,B; replaces the scene's TESSERA_environment");
+    cmd->add_option("--env-rotate", a->envRotate, "turn the environment by DEG about +Y (counter-clockwise seen from above)");
+    cmd->add_option("--env-intensity", a->envIntensity, "scale the environment's radiance")->check(CLI::NonNegativeNumber);
     cmd->add_option("--look-at", a->lookAt, "camera EX,EY,EZ,TX,TY,TZ[,UX,UY,UZ]: replaces the scene's camera");
     cmd->add_option("--fov", a->fovDeg, "vertical field of view in degrees (with or without --look-at)")->check(CLI::Range(0.001, 179.0));
     cmd->add_option("--display", a->display, "OCIO display for the PNG (default: sRGB)");

@@ -1,8 +1,13 @@
 #include "scene/environment.h"
 
+#include "core/error.h"
 #include "core/sampling.h"
 
 namespace tessera {
+
+std::unique_ptr<Image> readEnvironmentImage(const std::string& path) {
+    throw InputError(path + ": environment images need the texture layer (not merged yet)");
+}
 
 Vec2f EnvironmentLight::directionToUv(const Vec3f& d) {
     float u = 0.5f + std::atan2(d.z, d.x) * (0.5f * kInvPi);

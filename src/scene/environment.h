@@ -16,6 +16,7 @@
 /// +Y (u = ¼) is glTF's −Z, which is why Blender and the sample viewer show the same HDRI alike.
 /// `rotationDeg` turns the environment about +Y, counter-clockwise seen from above (right-handed):
 /// with 90° the image centre moves from +X to −Z.
+#include <memory>
 #include <string>
 
 #include "core/distribution.h"
@@ -32,6 +33,11 @@ struct EnvironmentDesc {
     float rotationDeg = 0.f;       ///< about +Y, counter-clockwise seen from above
     std::string source;            ///< file or "constant", for messages and metadata
 };
+
+/// Reads an equirectangular environment image (EXR, .hdr, … through the texture layer, linear).
+/// Throws InputError naming the file when it cannot be read, is smaller than 2×1 pixels, or holds
+/// a negative or non-finite value.
+std::unique_ptr<Image> readEnvironmentImage(const std::string& path);
 
 class EnvironmentLight {
 public:

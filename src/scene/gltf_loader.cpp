@@ -97,6 +97,7 @@ public:
         checkRequiredExtensions();
         scene_.sourcePath = path_;
         readRenderSettings();
+        readEnvironment();
         readMaterials();
         traverseScene();
         if (droppedTriangles_ > 0)
@@ -371,10 +372,12 @@ private:
         scene_.camera = d;
     }
 
-    /// KHR_lights_punctual: only "point" lights are modelled. glTF gives the intensity in candela
-    /// (lm/sr) and emission in nits (cd/m²); Tessera reads emissive values as radiance 1:1, so for the
-    /// same scale it reads candela as radiant intensity (W/sr) 1:1: I = intensity · color. `range`
-    /// is ignored (physically based inverse-square falloff, as the extension recommends).
+    /// KHR_lights_punctual point, spot and directional lights. glTF gives point and spot intensities
+    /// in candela (lm/sr), directional ones in lux (lm/m²), and emission in nits (cd/m²); Tessera
+    /// reads emissive values as radiance 1:1, so for the same scale it reads candela as radiant
+    /// intensity (W/sr) and lux as irradiance (W/m²) 1:1: I = intensity · color, E = intensity ·
+    /// color. Spot and directional lights shine along the node's local −Z. `range` is ignored
+    /// (physically based inverse-square falloff, as the extension recommends).
     void readPunctualLight(const gl::Value& v, const Mat4d& world, const std::string& el) {
         if (!v.IsObject() || !v.Has("light") || !v.Get("light").IsNumber()) fail(el, "needs a 'light' index");
         double index = v.Get("light").GetNumberAsDouble();
@@ -382,7 +385,7 @@ private:
             fail(el, "'light' must index extensions.KHR_lights_punctual.lights[]");
         const gl::Light& gl = model_.lights[size_t(index)];
         const std::string lel = idx("KHR_lights_punctual.lights", size_t(index));
-        if (gl.type != "point") {
+        if (gl.type != "point" && gl.type != "spot" && gl.type != "directional") {
             warnings_.push_back(path_ + ": " + lel + ": light type '" + gl.type + "' is not supported and is ignored");
             return;
         }
@@ -395,11 +398,81 @@ private:
                 color[c] = float(gl.color[size_t(c)]);
             }
         }
-        PointLightDesc pl;
-        pl.position = Vec3f(Vec3d(world[3]));
-        pl.intensity = color * float(gl.intensity);
-        if (!isFinite(pl.position)) fail(el, "light position is not finite");
-        if (!isBlack(pl.intensity)) scene_.pointLights.push_back(pl);
+        Rgb value = color * float(gl.intensity);
+        if (isBlack(value)) return;
+        Vec3f position = Vec3f(Vec3d(world[3]));
+        if (!isFinite(position)) fail(el, "light position is not finite");
+        Vec3d axis = -Vec3d(world[2]);  // the node's −Z in world space
+        double axisLength = glm::length(axis);
+        if (gl.type != "point" && !(axisLength > 0.0 && std::isfinite(axisLength))) fail(el, "light direction is degenerate");
+        Vec3f direction = Vec3f(axis / axisLength);
+        if (gl.type == "point") {
+            scene_.pointLights.push_back(PointLightDesc{position, value});
+        } else if (gl.type == "spot") {
+            double inner = gl.spot.innerConeAngle, outer = gl.spot.outerConeAngle;
+            // The extension: 0 ≤ innerConeAngle < outerConeAngle ≤ π/2.
+            if (!(inner >= 0.0 && inner < outer && outer <= 0.5 * kPi + 1e-6))
+                fail(lel, "spot cone angles must satisfy 0 <= innerConeAngle < outerConeAngle <= pi/2");
+            scene_.spotLights.push_back(SpotLightDesc{position, direction, value, float(inner), float(std::min(outer, 0.5 * kPi))});
+        } else {
+            scene_.directionalLights.push_back(DirectionalLightDesc{direction, value});
+        }
+    }
+
+    /// TESSERA_environment at the glTF root: {"color": [r, g, b], "intensity": s, "rotation": degrees,
+    /// and optionally "image": "file.exr" (a relative URI, confined to the scene's folder like
+    /// buffers) or "asset": "name" (looked up in the asset folders like TESSERA_asset_mesh)}. The
+    /// radiance is color × intensity (× the image, linear, equirectangular: scene/environment.h).
+    void readEnvironment() {
+        auto it = model_.extensions.find("TESSERA_environment");
+        if (it == model_.extensions.end()) return;
+        const gl::Value& v = it->second;
+        const std::string el = "extensions.TESSERA_environment";
+        if (!v.IsObject()) fail(el, "must be an object");
+        EnvironmentDesc env;
+        env.color = color3(v, "color", el, Rgb(1.f), 1e30);
+        double intensity = number(v, "intensity", el, 1.0);
+        if (!(intensity >= 0.0 && intensity <= 1e30)) fail(el, "'intensity' must be a non-negative number");
+        env.intensity = float(intensity);
+        env.rotationDeg = float(number(v, "rotation", el, 0.0));
+        env.source = "constant";
+        if (v.Has("image") && v.Has("asset")) fail(el, "give either 'image' or 'asset', not both");
+        std::string file;
+        if (v.Has("image")) {
+            if (!v.Get("image").IsString()) fail(el, "'image' must be a string (a file relative to the scene)");
+            std::string uri = v.Get("image").Get<std::string>();
+            std::error_code ec;
+            std::filesystem::path folder = std::filesystem::weakly_canonical(std::filesystem::absolute(path_), ec).parent_path();
+            file = (folder / uri).string();
+            FileAccess access;
+            access.root = folder;
+            access.options = options_;
+            if (!access.allowed(file)) fail(el, access.violation.empty() ? "cannot resolve '" + uri + "'" : access.violation);
+            if (!std::filesystem::is_regular_file(file, ec)) fail(el, "image '" + uri + "' not found");
+        } else if (v.Has("asset")) {
+            if (!v.Get("asset").IsString()) fail(el, "'asset' must be a string");
+            std::string name = v.Get("asset").Get<std::string>();
+            if (!isValidAssetName(name))
+                fail(el, "asset name '" + name + "' must be a relative path of [A-Za-z0-9._-] components without '..'");
+            std::optional<std::string> found = resolveAsset(name, options_.assetRoots);
+            if (!found) fail(el, "asset '" + name + "' not found in the asset folders; run tools/fetch_assets.sh or set TESSERA_ASSETS");
+            file = *found;
+        }
+        if (!file.empty()) {
+            std::error_code ec;
+            uint64_t size = std::filesystem::file_size(file, ec);
+            if (ec || size > options_.maxFileBytes) fail(el, "'" + file + "' is unreadable or over the file-size limit");
+            std::unique_ptr<Image> image;
+            try {
+                image = readEnvironmentImage(file);
+            } catch (const InputError& e) {
+                fail(el, e.what());
+            }
+            scene_.images.push_back(std::move(image));
+            env.image = scene_.images.back().get();
+            env.source = file;
+        }
+        scene_.environment = env;
     }
 
     void readSphere(const gl::Value& v, const Mat4d& world, const std::string& el) {
@@ -634,7 +707,7 @@ private:
 std::vector<std::string> supportedGltfExtensions() {
     return {"KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior",
             "KHR_materials_specular", "KHR_materials_volume",
-            "TESSERA_render", "TESSERA_sphere", "TESSERA_thin_lens", "TESSERA_asset_mesh"};
+            "TESSERA_render", "TESSERA_sphere", "TESSERA_thin_lens", "TESSERA_asset_mesh", "TESSERA_environment"};
 }
 
 Scene loadGltfScene(const std::string& path, std::vector<std::string>& warnings) {

@@ -6,6 +6,9 @@
 ///   TESSERA_thin_lens (camera): {apertureRadius, focusDistance}
 ///   TESSERA_asset_mesh (node): {asset, material}: a PLY (.gz too) or OBJ mesh that is not committed,
 ///     named relative to the asset folders (scene/assets.h), placed by the node's transform
+///   TESSERA_environment (root): {color [r,g,b], intensity, rotation (degrees about +Y), and "image"
+///     (a file beside the scene) or "asset" (in the asset folders)}: the environment light
+///     (scene/environment.h gives the equirectangular orientation)
 /// Material mapping (model no more than the scenes need): KHR_materials_transmission > 0 → smooth
 /// dielectric (KHR_materials_ior, default 1.5); metallicFactor ≥ 0.5 → mirror (roughness 0) or GGX
 /// conductor (α = roughness²) with F0 = baseColor; otherwise Lambertian with albedo = baseColor.
