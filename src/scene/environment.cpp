@@ -2,11 +2,25 @@
 
 #include "core/error.h"
 #include "core/sampling.h"
+#include "texture/texture.h"
 
 namespace tessera {
 
 std::unique_ptr<Image> readEnvironmentImage(const std::string& path) {
-    throw InputError(path + ": environment images need the texture layer (not merged yet)");
+    auto image = std::make_unique<Image>(readImageFile(path, ColorEncoding::Linear));
+    if (image->width() < 2 || image->height() < 1)
+        throw InputError(path + ": an environment image needs at least 2x1 pixels, got " + std::to_string(image->width()) + "x" +
+                         std::to_string(image->height()));
+    const ImageLevel& level = image->levels[0];
+    for (int y = 0; y < level.height; ++y)
+        for (int x = 0; x < level.width; ++x) {
+            const Vec4f& t = level.at(x, y);
+            if (!(t.r >= 0.f && t.g >= 0.f && t.b >= 0.f) || !std::isfinite(t.r + t.g + t.b))
+                throw InputError(path + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                 ") is negative or not finite: an environment holds radiance");
+        }
+    image->name = path;
+    return image;
 }
 
 Vec2f EnvironmentLight::directionToUv(const Vec3f& d) {
@@ -38,9 +52,51 @@ void EnvironmentLight::build(const EnvironmentDesc& desc) {
     sinRot_ = std::sin(rad);
     distribution_ = Distribution2D();
     luminanceIntegral_ = 4.0 * kPi * double(luminance(scale_));
+    if (!image_) return;
+
+    // Sampling weights: the luminance of the *bilinear* reconstruction that Le() returns, averaged
+    // over each pixel's cell — in 1D the cell average of the interpolant is ⅛ p(i−1) + ¾ p(i) +
+    // ⅛ p(i+1) (wrapping in u, clamped in v like the lookup) — so a cell is never given zero
+    // probability where Le is non-zero (which would bias the estimate), times sin θ at the cell's
+    // centre, the Jacobian of the lat-long map (pbrt-v4 §12.5.2).
+    const ImageLevel& level = image_->levels[0];
+    const int w = level.width, h = level.height;
+    std::vector<float> lum(size_t(w) * size_t(h)), weights(size_t(w) * size_t(h));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const Vec4f& t = level.at(x, y);
+            lum[size_t(y) * size_t(w) + size_t(x)] = std::max(0.f, luminance(scale_ * Rgb(t.r, t.g, t.b)));
+        }
+    const float k[3] = {0.125f, 0.75f, 0.125f};
+    double integral = 0.0;
+    for (int y = 0; y < h; ++y) {
+        float sinTheta = std::sin(kPi * (float(y) + 0.5f) / float(h));
+        for (int x = 0; x < w; ++x) {
+            float avg = 0.f;
+            for (int dy = -1; dy <= 1; ++dy) {
+                int yy = std::clamp(y + dy, 0, h - 1);
+                for (int dx = -1; dx <= 1; ++dx) {
+                    int xx = (x + dx + w) % w;
+                    avg += k[dy + 1] * k[dx + 1] * lum[size_t(yy) * size_t(w) + size_t(xx)];
+                }
+            }
+            weights[size_t(y) * size_t(w) + size_t(x)] = avg * sinTheta;
+            integral += double(avg) * sinTheta;
+        }
+    }
+    distribution_ = Distribution2D(weights, w, h);
+    luminanceIntegral_ = integral * (2.0 * kPi / w) * (kPi / h);  // Σ L sin θ Δφ Δθ
 }
 
-Rgb EnvironmentLight::lookup(Vec2f) const { return Rgb(1.f); }
+Rgb EnvironmentLight::lookup(Vec2f uv) const {
+    TextureRef tex;
+    tex.image = image_;
+    tex.wrapS = WrapMode::Repeat;      // longitude wraps around
+    tex.wrapT = WrapMode::ClampToEdge; // latitude stops at the poles
+    tex.filter = FilterMode::Linear;
+    Vec4f t = sampleTexture(tex, uv, 0.f);
+    return Rgb(t.r, t.g, t.b);
+}
 
 Rgb EnvironmentLight::Le(const Vec3f& wLight) const {
     if (!image_) return scale_;
