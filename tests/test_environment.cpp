@@ -7,6 +7,7 @@
 
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <iostream>
 
 #include "core/error.h"
@@ -300,8 +301,8 @@ TEST(IntegratorAgreement, HdriLitDiffuseGlossyAndGlass) {
 }
 
 // TESSERA_environment in a scene file: an EXR beside the scene (read linear, oriented and scaled as
-// documented), a constant colour, and the clear errors: a file outside the scene's folder, a
-// negative pixel, a missing file.
+// documented), a constant colour, negative and non-finite pixels read as 0, and the clear errors: a
+// file outside the scene's folder, a missing file, contradictory or invalid members.
 TEST(EnvironmentLoading, SceneExtensionReadsImagesBesideTheSceneOnly) {
     std::filesystem::path dir = test::tempDir("environment-load");
     std::filesystem::create_directories(dir / "scene");
@@ -314,6 +315,7 @@ TEST(EnvironmentLoading, SceneExtensionReadsImagesBesideTheSceneOnly) {
     writeImage(dir / "scene" / "sky.exr", 0.5f);
     writeImage(dir / "outside.exr", 0.5f);
     writeImage(dir / "scene" / "negative.exr", -1.f);
+    writeImage(dir / "scene" / "infinite.exr", std::numeric_limits<float>::infinity());
     auto sceneWith = [&](const std::string& environment) {
         std::string path = (dir / "scene" / "s.gltf").string();
         std::ofstream(path) << R"({"asset": {"version": "2.0"}, "extensionsUsed": ["TESSERA_environment"],
@@ -351,7 +353,11 @@ TEST(EnvironmentLoading, SceneExtensionReadsImagesBesideTheSceneOnly) {
         }
     };
     expectError(R"({"image": "../outside.exr"})", "outside");
-    expectError(R"({"image": "negative.exr"})", "negative");
+    Scene negative = loadGltfScene(sceneWith(R"({"image": "negative.exr"})"), warnings);
+    EXPECT_EQ(negative.lights().environmentLe(Vec3f(0.f, 1.f, 0.f)), Rgb(0.f));
+    EXPECT_NEAR(negative.lights().environmentLe(EnvironmentLight::uvToDirection(Vec2f(6.5f / w, 2.5f / h))).r, 5.f, 1e-4f);
+    Scene infinite = loadGltfScene(sceneWith(R"({"image": "infinite.exr"})"), warnings);  // non-finite texels read as 0
+    EXPECT_EQ(infinite.lights().environmentLe(Vec3f(0.f, 1.f, 0.f)), Rgb(0.f));
     expectError(R"({"image": "missing.exr"})", "not found");
     expectError(R"({"image": "sky.exr", "asset": "x.exr"})", "either");
     expectError(R"({"intensity": -1})", "intensity");

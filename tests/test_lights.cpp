@@ -6,6 +6,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "integrators/integrator.h"
+#include "texture/texture.h"
 #include "render/renderer.h"
 #include "scene/gltf_loader.h"
 #include "test_agreement.h"
@@ -31,6 +32,14 @@ Scene diffusePlane(Rgb albedo, float half) {
     cam.yfov = 0.9f;
     scene.camera = cam;
     return scene;
+}
+
+/// Looking down at the floor from above the emitter's height, off to the side.
+CameraDesc lookAtCameraDown() {
+    CameraDesc cam;
+    cam.cameraToWorld = glm::inverse(glm::lookAt(Vec3f(0.f, 2.5f, 2.5f), Vec3f(0.f), Vec3f(0.f, 1.f, 0.f)));
+    cam.yfov = 0.9f;
+    return cam;
 }
 
 Film render(const Scene& scene, const std::string& integrator, int w, int h, int spp, uint64_t seed, int maxDepth = -1) {
@@ -169,4 +178,96 @@ TEST(IntegratorAgreement, SpotLitCornellBox) {
     scene.spotLights.push_back(spot);
     scene.finalize();
     test::expectIntegratorsAgree(scene, {{"ptnee", 16}, {"lt", 32}, {"bdpt", 8}}, 32, 32, 24);
+}
+
+namespace {
+
+/// A 1 × 1 emitter in the plane y = `height` facing down, with texture coordinates (0..1) and an
+/// emissive texture of 4 × 2 texels, nearest-filtered, whose left column is black, and the rest
+/// grows brighter to the right; above a diffuse floor.
+Scene texturedEmitterScene(const Image* texture) {
+    Scene scene;
+    Material floor, light;
+    floor.bsdf.baseColor = Rgb(0.7f);
+    light.bsdf.baseColor = Rgb(0.f);
+    light.emission = Rgb(4.f, 3.f, 2.f);
+    light.textures.emissive.image = texture;
+    light.textures.emissive.filter = FilterMode::Nearest;
+    scene.materials = {floor, light};
+    TriangleMesh quad;
+    quad.name = "floor";
+    quad.positions = {{-3.f, 0.f, -3.f}, {3.f, 0.f, -3.f}, {3.f, 0.f, 3.f}, {-3.f, 0.f, 3.f}};
+    quad.triangles = {{0, 2, 1}, {0, 3, 2}};
+    scene.geometry.meshes.push_back(quad);
+    TriangleMesh emitter;
+    emitter.name = "emitter";
+    emitter.materialId = 1;
+    emitter.positions = {{-0.5f, 1.f, -0.5f}, {0.5f, 1.f, -0.5f}, {0.5f, 1.f, 0.5f}, {-0.5f, 1.f, 0.5f}};
+    emitter.texcoords[0] = {{0.f, 0.f}, {1.f, 0.f}, {1.f, 1.f}, {0.f, 1.f}};
+    emitter.triangles = {{0, 1, 2}, {0, 2, 3}};  // facing −y (down)
+    scene.geometry.meshes.push_back(emitter);
+    scene.finalize();
+    return scene;
+}
+
+}  // namespace
+
+// An emissive texture multiplies the emission point by point (glTF emissiveFactor × emissiveTexture)
+// in every integrator's emitter evaluation, and light selection weighs each triangle by its mean
+// texture value: the camera looking up at the emitter sees the texture's texels, a triangle over
+// black texels is never picked, and the integrators agree on the floor it lights.
+TEST(TexturedEmitter, EmissionFollowsTheTextureAndSelectionItsPower) {
+    auto image = std::make_unique<Image>();
+    ImageLevel level;
+    level.width = 4;
+    level.height = 2;
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 4; ++x) level.texels.push_back(x == 0 ? Vec4f(0.f, 0.f, 0.f, 1.f) : Vec4f(float(x) * 0.25f + 0.1f * y + 0.05f));
+    image->levels.push_back(level);
+    buildMipLevels(*image);
+    Scene scene = texturedEmitterScene(image.get());
+    const LightSet& lights = scene.lights();
+    ASSERT_EQ(lights.size(), 2u);
+    // Selection ∝ emitted power: the two triangles' mean texture values, by quadrature over each.
+    auto meanOver = [&](int tri) {
+        const TriangleMesh& m = scene.geometry.meshes[1];
+        double sum = 0.0;
+        const int n = 200;
+        int count = 0;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n - j; ++i) {
+                float u = (float(i) + 0.33f) / n, v = (float(j) + 0.33f) / n;
+                Vec2f uv = m.texcoordAt(0, uint32_t(tri), u, v);
+                Vec4f t = sampleTexture(scene.materials[1].textures.emissive, uv, 0.f);
+                sum += luminance(Rgb(4.f, 3.f, 2.f) * Rgb(t.r, t.g, t.b));
+                ++count;
+            }
+        return sum / count;
+    };
+    double p0 = meanOver(0), p1 = meanOver(1);
+    EXPECT_NEAR(lights.pickPmf(0) / lights.pickPmf(1), p0 / p1, 0.06 * p0 / p1);
+    // Seen from below: the pixel under texel x shows emission × texel.
+    CameraDesc cam;
+    cam.cameraToWorld = glm::inverse(glm::lookAt(Vec3f(0.f, 0.2f, 0.f), Vec3f(0.f, 1.f, 0.f), Vec3f(0.f, 0.f, 1.f)));
+    cam.yfov = 0.7f;
+    scene.camera = cam;
+    Camera camera(cam, 8, 8);
+    Film film = render(scene, "ptnee", 8, 8, 4, 9, 0);
+    int checked = 0;
+    for (int y = 1; y < 7; ++y)
+        for (int x = 1; x < 7; ++x) {
+            // Where the pixel centre's ray meets the emitter, and the texel there.
+            Ray ray = camera.generateRay(Vec2f(float(x) + 0.5f, float(y) + 0.5f), Vec2f(0.5f));
+            Vec3f p = ray.o + ((1.f - ray.o.y) / ray.d.y) * ray.d;
+            if (std::abs(p.x) > 0.45f || std::abs(p.z) > 0.45f) continue;
+            float fu = (p.x + 0.5f) * 4.f, fv = (p.z + 0.5f) * 2.f;
+            if (std::abs(fu - std::round(fu)) < 0.3f || std::abs(fv - std::round(fv)) < 0.3f) continue;  // texel edge
+            Vec4f t = image->levels[0].at(int(fu), int(fv));
+            EXPECT_NEAR(film.pixel(x, y).r, 4.f * t.r, 1e-3f) << "pixel " << x << "," << y;
+            ++checked;
+        }
+    EXPECT_GE(checked, 4);
+    // The floor under the emitter, through every strategy that finds a textured emitter.
+    scene.camera = lookAtCameraDown();
+    test::expectIntegratorsAgree(scene, {{"ptnee", 8}, {"pt", 32}, {"lt", 16}, {"bdpt", 4}}, 32, 32, 24);
 }

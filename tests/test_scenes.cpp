@@ -31,6 +31,7 @@ struct ShippedScene {
     /// applies. Measured over 8+ seeds (reference_ztest.h); false where caustics or s = 0
     /// strategies make bin means Poisson-like.
     bool nearNormal;
+    const char* asset = nullptr;  ///< another fetched asset the scene needs (skipped without it)
 };
 
 // Every scene of tools/make_scenes.py's SCENE_LIST.
@@ -50,6 +51,8 @@ const ShippedScene kScenes[] = {
     {"sds-caustic", "scenes/sds-caustic/sds-caustic.gltf", false, 4, false},
     {"point-light-specular", "scenes/point-light-specular/point-light-specular.gltf", false, 4, false},
     {"furnace", "scenes/furnace/furnace.gltf", false, 4, true},
+    {"spot-light", "scenes/spot-light/spot-light.gltf", false, 4, false},
+    {"hdri-spheres", "scenes/hdri-spheres/hdri-spheres.gltf", false, 4, false, "pmndrs-hdri/sky.exr"},
 };
 
 const char* const kIntegrators[] = {"pt", "ptnee", "lt", "bdpt"};
@@ -177,6 +180,7 @@ TEST(Scenes, MissingAssetIsAClearError) {
 TEST_P(ShippedSceneTest, EveryIntegratorRendersFourSppWithoutNaN) {
     const ShippedScene& s = GetParam();
     if (s.needsDragon && !dragonAvailable()) GTEST_SKIP() << kNoDragon;
+    if (s.asset && !resolveAsset(s.asset, loadOptions().assetRoots)) GTEST_SKIP() << test::missingAssetMessage(s.asset);
     Scene scene = loadShipped(s);
     auto accel = createAccel("embree", scene.geometry);
     double ptneeSum = 0;
@@ -195,6 +199,7 @@ TEST_P(ShippedSceneTest, EveryIntegratorRendersFourSppWithoutNaN) {
 TEST_P(ShippedSceneTest, MatchesItsReference) {
     const ShippedScene& s = GetParam();
     if (s.needsDragon && !dragonAvailable()) GTEST_SKIP() << kNoDragon;
+    if (s.asset && !resolveAsset(s.asset, loadOptions().assetRoots)) GTEST_SKIP() << test::missingAssetMessage(s.asset);
     Reference ref = loadReference(s.name);
     ASSERT_FALSE(ref.integrator.empty()) << "refs/" << s.name << ".exr has no tessera:integrator";
     ASSERT_EQ(metadata(ref.mean, "tessera:scene_hash"), fnv1a64OfFile(test::sourcePath(s.path)))

@@ -225,6 +225,39 @@ class Gltf:
         return self.add("nodes", {"name": name, "translation": list(position),
                                   "extensions": {"KHR_lights_punctual": {"light": len(lights) - 1}}})
 
+    def _punctual(self, light):
+        self.use("KHR_lights_punctual")
+        lights = self.doc.setdefault("extensions", {}).setdefault(
+            "KHR_lights_punctual", {"lights": []})["lights"]
+        lights.append(light)
+        return len(lights) - 1
+
+    def spot_light(self, name, position, target, color, intensity, inner, outer):
+        """KHR_lights_punctual spot light at `position` shining towards `target` (its local -z),
+        cone angles in radians; Tessera reads intensity x color as W/sr on the axis."""
+        index = self._punctual({"name": name, "type": "spot", "color": list(color), "intensity": intensity,
+                                "spot": {"innerConeAngle": inner, "outerConeAngle": outer}})
+        return self.add("nodes", {"name": name, "translation": list(position),
+                                  "rotation": list(look_at_rotation(position, target)),
+                                  "extensions": {"KHR_lights_punctual": {"light": index}}})
+
+    def directional_light(self, name, direction, color, intensity):
+        """KHR_lights_punctual directional light travelling along `direction` (its local -z);
+        Tessera reads intensity x color (lux) as irradiance (W/m^2)."""
+        index = self._punctual({"name": name, "type": "directional", "color": list(color),
+                                "intensity": intensity})
+        return self.add("nodes", {"name": name, "rotation": list(look_at_rotation((0.0, 0.0, 0.0), direction)),
+                                  "extensions": {"KHR_lights_punctual": {"light": index}}})
+
+    def environment(self, asset=None, color=(1.0, 1.0, 1.0), intensity=1.0, rotation=0.0):
+        """TESSERA_environment (root): an equirectangular HDRI from the asset folders, or a
+        constant colour, scaled by color x intensity and turned `rotation` degrees about +y."""
+        self.use("TESSERA_environment")
+        env = {"color": list(color), "intensity": intensity, "rotation": rotation}
+        if asset is not None:
+            env["asset"] = asset
+        self.doc.setdefault("extensions", {})["TESSERA_environment"] = env
+
     def asset_mesh(self, name, asset, material, translation, scale, rotation=None):
         """TESSERA_asset_mesh: a mesh file that is never committed (e.g. the
         Stanford dragon), named relative to TESSERA_ASSETS / the fetch cache."""

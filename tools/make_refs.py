@@ -72,6 +72,8 @@ SCENES = {
     "point-light-specular": ("scenes/point-light-specular/point-light-specular.gltf", "128x96",
                              "bdpt", 128, None, 0),
     "furnace": ("scenes/furnace/furnace.gltf", "64x64", "bdpt", 32, "ptnee", 64),
+    "spot-light": ("scenes/spot-light/spot-light.gltf", "128x96", "bdpt", 256, "ptnee", 512),
+    "hdri-spheres": ("scenes/hdri-spheres/hdri-spheres.gltf", "128x96", "bdpt", 256, "ptnee", 512),
 }
 
 WHY = {
@@ -95,6 +97,10 @@ WHY = {
     "point-light-specular": "point light: ptnee misses the caustics, lt what the mirror shows; bdpt samples "
                             "all but point light -> specular -> diffuse -> specular -> camera (no method can)",
     "furnace": "analytic: every pixel Le / (1 - a) = (2, 1.4286, 3.3333)",
+    "spot-light": "spot and directional lights only (deltas): pt sees black; ptnee reaches every path through "
+                  "the glossy sphere by BSDF sampling, bdpt also by light tracing",
+    "hdri-spheres": "environment only (a small sun holds 2/3 of the light): ptnee and bdpt sample it by "
+                    "luminance; the glass sphere's caustic comes from bdpt's light sub-paths (t=1)",
 }
 
 

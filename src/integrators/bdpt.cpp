@@ -1,5 +1,7 @@
 #include "integrators/bdpt.h"
 
+#include <algorithm>
+
 #include "integrators/bdpt_connect.h"
 #include "integrators/sample_trace.h"
 
@@ -25,8 +27,12 @@ Rgb BdptIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
     Rgb L(0.f);
     const int nCamera = int(camera.size()), nLight = int(light.size());
     for (int t = 1; t <= nCamera; ++t) {
-        for (int s = 0; s <= nLight; ++s) {
+        // s = 1 resamples its light point, so it exists even when the light sub-path is empty (its
+        // origin emitted nothing: a black texel of an emissive texture); leaving it out would drop
+        // the next-event strategy for those samples while its weight still counts on it.
+        for (int s = 0; s <= std::max(nLight, 1); ++s) {
             if (s + t < 2) continue;
+            if (s > nLight && t == 1) continue;  // (1, 1) joins the light sub-path's own y0 to the lens
             if (maxDepth >= 0 && s + t - 2 > maxDepth) continue;
             ConnectionResult r = connectBdpt(ctx, light, camera, s, t, sampler, settings_.heuristic);
             if (ctx.trace) [[unlikely]] {

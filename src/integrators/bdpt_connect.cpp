@@ -38,7 +38,9 @@ float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> l
     // camera ray: no lens connection reaches a direction.
     if (s == 0 && t == 2 && pt->atInfinity) return 1.f;
     MisScratch y{size_t(s)}, z{size_t(t)};
-    for (int i = 0; i < s; ++i) y[size_t(i)] = {light[size_t(i)].pdfFwdA, light[size_t(i)].pdfRevA, light[size_t(i)].delta};
+    // For s = 1 the light sub-path may be empty (its y0 is the resampled `qs`, filled in below).
+    for (int i = 0; i < s && size_t(i) < light.size(); ++i)
+        y[size_t(i)] = {light[size_t(i)].pdfFwdA, light[size_t(i)].pdfRevA, light[size_t(i)].delta};
     for (int i = 0; i < t; ++i) z[size_t(i)] = {camera[size_t(i)].pdfFwdA, camera[size_t(i)].pdfRevA, camera[size_t(i)].delta};
     const PathVertex* qsMinus = s >= 2 ? &light[size_t(s - 2)] : nullptr;
     const PathVertex* ptMinus = t >= 2 ? &camera[size_t(t - 2)] : nullptr;
@@ -48,7 +50,7 @@ float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> l
     // area / selection only); for spheres, whose NEE samples the visible cone, it is a proxy: the
     // weights still sum to 1 over the strategies of every path, which is all unbiasedness needs
     // (Veach 1997, §9.2.2, eq. 9.6). The same holds for ignoring Russian roulette in the densities.
-    if (s == 1) y[0] = {pdfLightOriginA(ctx, *qs), y[0].pdfRevA, false};
+    if (s == 1) y[0] = {pdfLightOriginA(ctx, *qs), 0.f, false};  // pdfRevA: set below
     // A camera endpoint on an emitter acts as the light vertex y0 of strategy s = 1: never delta.
     if (s == 0) z[size_t(t - 1)].delta = false;
 
@@ -74,7 +76,8 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
     ConnectionResult r;
     if (t < 1 || s + t < 2) return r;
     PathVertex sampled;  // the resampled endpoint for s = 1 or t = 1
-    const PathVertex* qs = s > 0 ? &light[size_t(s - 1)] : nullptr;
+    // For s = 1 the light point is resampled below: the light sub-path may even be empty.
+    const PathVertex* qs = s > 0 && size_t(s) <= light.size() ? &light[size_t(s - 1)] : nullptr;
     const PathVertex* pt = &camera.data()[t - 1];  // not dereferenced when t = 1 (replaced below)
 
     if (s == 0) {
@@ -82,7 +85,7 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
         r.L = pt->beta * emittedAt(ctx, *pt);
     } else if (t == 1) {
         // Light tracing: connect y(s−1) to a lens point; the contribution lands on another pixel.
-        if (!qs->connectible()) return r;
+        if (!qs || !qs->connectible()) return r;
         CameraSample cs;
         if (!ctx.camera.sampleIncoming(qs->p, sampler.get2D(), cs)) return r;
         sampled.type = VertexType::Camera;
@@ -105,6 +108,7 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
         sampled.atInfinity = ls.isInfinite;
         sampled.ng = sampled.ns = ls.isInfinite ? ls.wi : ls.n;
         sampled.lightIndex = ls.index;
+        sampled.bary = ls.bary;
         // Radiance (area, environment), I/d² (point, spot) or E (directional) over the NEE density.
         sampled.beta = ls.Le / ls.pdfW;
         Rgb f = evalVertex(ctx, *pt, sampled, TransportMode::Radiance);

@@ -73,7 +73,7 @@ Rgb evalVertex(const RenderContext& ctx, const PathVertex& v, const PathVertex& 
         return Rgb(ctx.camera.importance(v.p, w));
     case VertexType::Light:
         // Radiance (area lights), intensity towards w (point, spot lights).
-        return ctx.scene.lights().emitted(v.lightIndex, v.ng, w);
+        return ctx.scene.lights().emitted(v.lightIndex, v.ng, w, v.bary);
     case VertexType::Surface: {
         SurfaceBsdf bsdf(v.bsdf, v.ns, v.ng);
         return bsdf.eval(v.woWorld, w, mode);
@@ -86,7 +86,7 @@ Rgb emittedAt(const RenderContext& ctx, const PathVertex& v) {
     if (v.lightIndex == kInvalidId) return Rgb(0.f);
     if (v.type == VertexType::Light && v.atInfinity) return ctx.scene.lights().environmentLe(v.ng);
     if (v.type != VertexType::Surface) return Rgb(0.f);
-    return ctx.scene.lights().emitted(v.lightIndex, v.ng, v.woWorld);
+    return ctx.scene.lights().emitted(v.lightIndex, v.ng, v.woWorld, v.bary);
 }
 
 namespace {
@@ -114,6 +114,7 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
             v.woWorld = -glm::normalize(ray.d);
             v.bsdf = scene.bsdfParams(si);
             v.lightIndex = si.lightIndex;
+            v.bary = si.bary;
         } else {
             // A camera ray that escapes reaches the environment: the sub-path ends with a vertex at
             // infinity, the s = 0 strategy's emitter (pbrt-v3 §16.3.2). Light sub-paths just end.
@@ -188,6 +189,7 @@ void traceLightSubpath(const RenderContext& ctx, Sampler& sampler, int maxVertic
     y0.ng = y0.ns = le.isInfinite ? -le.dir : le.n;
     y0.atInfinity = le.isInfinite;
     y0.lightIndex = le.index;
+    y0.bary = le.bary;
     // y0 carries 1/pdfPosA; its "f" towards the next vertex is the emitted radiance (intensity). An
     // infinite light's origin density is that of its direction (pdfLightOriginA); its y0 is never
     // connected (not connectible), so its beta is unused.

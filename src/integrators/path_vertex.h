@@ -32,6 +32,7 @@ struct PathVertex {
     Rgb beta{0.f};       ///< sub-path throughput up to this vertex (Veach's α, eq. 10.4/10.5)
     BsdfParams bsdf;     ///< the BSDF inputs at p (textures resolved), for surface vertices
     uint32_t lightIndex = kInvalidId;  ///< light vertex: its light; surface vertex: the emitter it lies on, if any
+    Vec2f bary{0.f};     ///< barycentrics on its triangle (Hit's u, v): where an emissive texture is read
     bool delta = false;  ///< scattered by a delta BSDF here (cannot be a connection end)
     bool atInfinity = false;  ///< an infinite light's vertex (environment, directional): `ng` is its direction
     float pdfFwdA = 0.f;  ///< area density; solid angle for a vertex at infinity

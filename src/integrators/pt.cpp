@@ -25,11 +25,11 @@ Rgb PtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler&
         }
         SurfaceInteraction si = scene.interaction(ray, hit);
         Vec3f wo = -glm::normalize(ray.d);
-        if (si.lightIndex != kInvalidId) L += beta * scene.lights().emitted(si.lightIndex, si.ng, wo);
+        if (si.lightIndex != kInvalidId) L += beta * scene.lights().emitted(si.lightIndex, si.ng, wo, si.bary);
         SampleTrace* trace = ctx.trace;
         if (trace) [[unlikely]] {
             trace->vertex(depth, si.p, si.ng, si.materialId, beta);
-            if (si.lightIndex != kInvalidId) trace->add("emissionContribution", beta * scene.lights().emitted(si.lightIndex, si.ng, wo));
+            if (si.lightIndex != kInvalidId) trace->add("emissionContribution", beta * scene.lights().emitted(si.lightIndex, si.ng, wo, si.bary));
             trace->add("L", L);
         }
         if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;

@@ -16,7 +16,7 @@ namespace {
 void addEmission(const RenderContext& ctx, const SurfaceInteraction& si, const Vec3f& wo, const Rgb& beta, bool deltaBounce,
                  float prevPdfW, const Vec3f& prevP, Rgb& L) {
     const LightSet& lights = ctx.scene.lights();
-    Rgb Le = lights.emitted(si.lightIndex, si.ng, wo);
+    Rgb Le = lights.emitted(si.lightIndex, si.ng, wo, si.bary);
     if (isBlack(Le)) return;
     SampleTrace* trace = ctx.trace;
     if (deltaBounce) {

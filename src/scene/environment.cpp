@@ -11,14 +11,18 @@ std::unique_ptr<Image> readEnvironmentImage(const std::string& path) {
     if (image->width() < 2 || image->height() < 1)
         throw InputError(path + ": an environment image needs at least 2x1 pixels, got " + std::to_string(image->width()) + "x" +
                          std::to_string(image->height()));
-    const ImageLevel& level = image->levels[0];
-    for (int y = 0; y < level.height; ++y)
-        for (int x = 0; x < level.width; ++x) {
-            const Vec4f& t = level.at(x, y);
-            if (!(t.r >= 0.f && t.g >= 0.f && t.b >= 0.f) || !std::isfinite(t.r + t.g + t.b))
-                throw InputError(path + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                                 ") is negative or not finite: an environment holds radiance");
-        }
+    // Radiance cannot be negative, but real HDRIs hold negative pixels: lossy EXR compression (DWA)
+    // and resampling ring around the sun (Poly Haven's "sky" at 512x256 has values down to −3394
+    // next to +22672). They are clamped to 0 (non-finite texels the texture layer already made 0).
+    ImageLevel& level = image->levels[0];
+    bool clamped = false;
+    for (Vec4f& t : level.texels)
+        for (int c = 0; c < 3; ++c)
+            if (t[c] < 0.f) t[c] = 0.f, clamped = true;
+    if (clamped) {
+        image->levels.resize(1);
+        buildMipLevels(*image);
+    }
     image->name = path;
     return image;
 }

@@ -35,8 +35,8 @@ struct EnvironmentDesc {
 };
 
 /// Reads an equirectangular environment image (EXR, .hdr, … through the texture layer, linear).
-/// Throws InputError naming the file when it cannot be read, is smaller than 2×1 pixels, or holds
-/// a negative or non-finite value.
+/// Negative pixels (ringing of lossy compression) are clamped to 0, non-finite ones are 0 (texture
+/// layer). Throws InputError naming the file when it cannot be read or is smaller than 2×1 pixels.
 std::unique_ptr<Image> readEnvironmentImage(const std::string& path);
 
 class EnvironmentLight {

@@ -3,16 +3,33 @@
 #include "core/frame.h"
 #include "core/sampling.h"
 #include "geometry/intersect.h"
+#include "texture/texture.h"
 
 namespace tessera {
 namespace {
-/// Uniform point (pdfA = 1/area) on triangle `primId` of `mesh`, with its unit geometric normal.
-void samplePointOnTriangle(const TriangleMesh& mesh, uint32_t primId, Vec2f u, Vec3f& p, Vec3f& n) {
+/// Uniform point (pdfA = 1/area) on triangle `primId` of `mesh`, with its unit geometric normal and
+/// its barycentrics (u, v) of vertices 1 and 2 (Hit's convention).
+void samplePointOnTriangle(const TriangleMesh& mesh, uint32_t primId, Vec2f u, Vec3f& p, Vec3f& n, Vec2f& bary) {
     const glm::uvec3& t = mesh.triangles[primId];
     const Vec3f &p0 = mesh.positions[t.x], &p1 = mesh.positions[t.y], &p2 = mesh.positions[t.z];
     Vec2f b = sampleUniformTriangle(u);
     p = b.x * p0 + b.y * p1 + (1.f - b.x - b.y) * p2;
     n = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+    bary = Vec2f(b.y, 1.f - b.x - b.y);
+}
+
+/// The emissive texture's mean over a triangle, from 16 stratified points (uniform by area): the
+/// weight of the triangle's power in light selection. Within the triangle points stay uniform by
+/// area, so a texture that varies inside one triangle costs variance, never correctness.
+Rgb meanTextureOverTriangle(const TextureRef& tex, const TriangleMesh& mesh, int set, uint32_t primId) {
+    Rgb sum(0.f);
+    for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i) {
+            Vec2f b = sampleUniformTriangle(Vec2f((float(i) + 0.5f) / 4.f, (float(j) + 0.5f) / 4.f));
+            Vec4f t = sampleTexture(tex, mesh.texcoordAt(set, primId, b.y, 1.f - b.x - b.y), 0.f);
+            sum += Rgb(t.r, t.g, t.b);
+        }
+    return sum / 16.f;
 }
 /// Below sin²θmax = sin²(1.5°) the cone's 1 − cos θmax cancels catastrophically in float: use the
 /// series 1 − cos θ ≈ sin²θ / 2 instead (the same threshold pbrt-v4 uses).
@@ -27,6 +44,7 @@ void LightSet::build(const SceneGeometry& geometry, const std::vector<Material>&
     environmentIndex_ = kInvalidId;
     meshFirstLight_.assign(geometry.meshes.size(), kInvalidId);
     sphereLight_.assign(geometry.spheres.size(), kInvalidId);
+    meshEmissive_.assign(geometry.meshes.size(), TextureRef{});
 
     // The scene's bounding sphere (of the geometry, as pbrt's): infinite lights emit from a disk of
     // its radius and their power is measured through it. Padded so that the disk's rays start
@@ -47,13 +65,18 @@ void LightSet::build(const SceneGeometry& geometry, const std::vector<Material>&
         // Every triangle of an emissive mesh gets a light slot, even a zero-area one, so that
         // lightIndexOf is a plain offset; zero-area ones get zero power and are never picked.
         meshFirstLight_[g] = uint32_t(lights_.size());
+        // An emissive texture (glTF emissiveTexture, sRGB-decoded) multiplies the emission per point;
+        // without texture coordinates it is read at (0, 0), as the material code does.
+        const TextureRef& tex = mat.textures.emissive;
+        if (tex.valid()) meshEmissive_[g] = tex;
         for (uint32_t i = 0; i < mesh.triangles.size(); ++i) {
             const glm::uvec3& t = mesh.triangles[i];
             float area = 0.5f * glm::length(glm::cross(mesh.positions[t.y] - mesh.positions[t.x],
                                                        mesh.positions[t.z] - mesh.positions[t.x]));
             Light l{LightType::Triangle, g, i, mat.emission, mat.doubleSided, area};
             lights_.push_back(l);
-            power.push_back(luminance(mat.emission) * area * kPi * (mat.doubleSided ? 2.f : 1.f));
+            Rgb radiance = tex.valid() ? mat.emission * meanTextureOverTriangle(tex, mesh, tex.texCoord, i) : mat.emission;
+            power.push_back(luminance(radiance) * area * kPi * (mat.doubleSided ? 2.f : 1.f));
         }
     }
     for (uint32_t i = 0; i < geometry.spheres.size(); ++i) {
@@ -120,11 +143,19 @@ Rgb LightSet::intensityTowards(const Light& l, const Vec3f& w) const {
     return l.Le * spotFalloff(glm::dot(l.direction, w), l.cosInner, l.cosOuter);
 }
 
-Rgb LightSet::emitted(uint32_t index, const Vec3f& n, const Vec3f& w) const {
+Rgb LightSet::radianceAt(uint32_t index, Vec2f bary) const {
+    const Light& l = lights_[index];
+    if (l.type != LightType::Triangle || !meshEmissive_[l.geomId].valid()) return l.Le;
+    const TextureRef& tex = meshEmissive_[l.geomId];
+    Vec4f t = sampleTexture(tex, geometry_->meshes[l.geomId].texcoordAt(tex.texCoord, l.primId, bary.x, bary.y), 0.f);
+    return l.Le * Rgb(t.r, t.g, t.b);
+}
+
+Rgb LightSet::emitted(uint32_t index, const Vec3f& n, const Vec3f& w, Vec2f bary) const {
     const Light& l = lights_[index];
     switch (l.type) {
     case LightType::Triangle:
-    case LightType::Sphere: return (l.twoSided || glm::dot(n, w) > 0.f) ? l.Le : Rgb(0.f);
+    case LightType::Sphere: return (l.twoSided || glm::dot(n, w) > 0.f) ? radianceAt(index, bary) : Rgb(0.f);
     case LightType::Point:
     case LightType::Spot: return intensityTowards(l, w);
     case LightType::Directional: return l.Le;
@@ -189,7 +220,7 @@ bool LightSet::sample(const Vec3f& ref, float uPick, Vec2f u, LightSample& out) 
     float len = glm::length(d);
     if (!(len > 0.f)) return false;
     out.wi = d / len;
-    out.Le = emitted(index, out.n, -out.wi);
+    out.Le = emitted(index, out.n, -out.wi, out.bary);
     return true;
 }
 
@@ -243,7 +274,7 @@ bool LightSet::sampleEmission(float uPick, Vec2f uPos, Vec2f uDir, LightEmission
     case LightType::Sphere: break;
     }
     if (l.type == LightType::Triangle) {
-        samplePointOnTriangle(geometry_->meshes[l.geomId], l.primId, uPos, out.p, out.n);
+        samplePointOnTriangle(geometry_->meshes[l.geomId], l.primId, uPos, out.p, out.n, out.bary);
     } else {
         const Sphere& s = geometry_->spheres[l.primId];
         out.n = sampleUniformSphere(uPos);
@@ -265,7 +296,7 @@ bool LightSet::sampleEmission(float uPick, Vec2f uPos, Vec2f uDir, LightEmission
     Vec3f local = sampleCosineHemisphere(u);
     if (!(local.z > 0.f)) return false;
     out.dir = glm::normalize(frame.toWorld(local));
-    out.Le = l.Le;
+    out.Le = radianceAt(index, out.bary);
     out.isDeltaPos = false;
     pdfEmission(index, out.n, out.dir, out.pdfPosA, out.pdfDirW);
     return out.pdfPosA > 0.f && out.pdfDirW > 0.f;
@@ -309,7 +340,7 @@ float LightSet::pdfW(uint32_t index, const Vec3f& ref, const Vec3f& pLight, cons
 float LightSet::sampleOne(uint32_t index, const Vec3f& ref, Vec2f u, LightSample& out) const {
     const Light& l = lights_[index];
     if (l.type == LightType::Triangle) {
-        samplePointOnTriangle(geometry_->meshes[l.geomId], l.primId, u, out.p, out.n);
+        samplePointOnTriangle(geometry_->meshes[l.geomId], l.primId, u, out.p, out.n, out.bary);
         return pdfOneW(index, ref, out.p, out.n);
     }
     const Sphere& s = geometry_->spheres[l.primId];

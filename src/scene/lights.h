@@ -75,6 +75,7 @@ struct LightSample {
     Vec3f p{0.f};     ///< point on the light (infinite lights: a point 2r beyond the reference point along wi)
     Vec3f n{0.f};     ///< unit surface normal at p (outward / front face); zero for point, spot and infinite lights
     Vec3f wi{0.f};    ///< unit direction from the reference point towards the light
+    Vec2f bary{0.f};  ///< triangle lights: the point's barycentrics (u, v) of vertices 1 and 2, as in Hit
     Rgb Le{0.f};      ///< radiance leaving p towards the reference point (0 if p shows its back);
                       ///< for a point or spot light the intensity divided by d², i.e. the irradiance at
                       ///< normal incidence; for a directional light its irradiance
@@ -98,6 +99,7 @@ struct LightEmission {
     float pdfDirW = 0.f;   ///< solid-angle density of dir given p
     bool isDeltaPos = false;
     bool isInfinite = false;
+    Vec2f bary{0.f};       ///< triangle lights: the point's barycentrics (u, v) of vertices 1 and 2
     uint32_t index = kInvalidId;
 };
 
@@ -124,10 +126,14 @@ public:
     /// Density (solid angle at `ref`, selection included) with which sample() produces the point
     /// `pLight` (normal `nLight`) on light `index`: the MIS counterpart of a BSDF-sampled hit.
     float pdfW(uint32_t index, const Vec3f& ref, const Vec3f& pLight, const Vec3f& nLight) const;
-    /// Radiance leaving light `index` at a point with normal `n` in direction `w` (unit); for point
-    /// and spot lights the intensity towards w, for a directional light its irradiance, for the
-    /// environment the radiance arriving from −w.
-    Rgb emitted(uint32_t index, const Vec3f& n, const Vec3f& w) const;
+    /// Radiance leaving light `index` at a point with normal `n` in direction `w` (unit); `bary`
+    /// (the point's barycentrics on a triangle light, as in Hit) places it on an emissive texture.
+    /// For point and spot lights the intensity towards w, for a directional light its irradiance,
+    /// for the environment the radiance arriving from −w.
+    Rgb emitted(uint32_t index, const Vec3f& n, const Vec3f& w, Vec2f bary) const;
+    /// The radiance of area light `index` at barycentrics `bary`: the material's emission times its
+    /// emissive texture there (glTF emissiveFactor × emissiveTexture), ignoring the facing.
+    Rgb radianceAt(uint32_t index, Vec2f bary) const;
 
     /// The environment, if any: its light index, the radiance arriving from direction `wLight` (unit,
     /// pointing away from the scene; 0 without an environment) and the solid-angle density, light
@@ -179,6 +185,7 @@ private:
     float sceneRadius_ = 1.f;
     std::vector<uint32_t> meshFirstLight_;   ///< per mesh: index of its first triangle light, or invalid
     std::vector<uint32_t> sphereLight_;      ///< per sphere: its light index, or invalid
+    std::vector<TextureRef> meshEmissive_;   ///< per mesh: its material's emissive texture (invalid: none)
 };
 
 }  // namespace tessera
