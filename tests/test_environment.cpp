@@ -5,10 +5,14 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
-#include <limits>
 #include <iostream>
+#include <limits>
 
 #include "core/error.h"
 #include "integrators/integrator.h"
@@ -361,4 +365,42 @@ TEST(EnvironmentLoading, SceneExtensionReadsImagesBesideTheSceneOnly) {
     expectError(R"({"image": "missing.exr"})", "not found");
     expectError(R"({"image": "sky.exr", "asset": "x.exr"})", "either");
     expectError(R"({"intensity": -1})", "intensity");
+}
+
+// The command line: --env R,G,B lights a scene that has none (the background is that colour),
+// --env-intensity scales it, and the environment options alone on a scene without one are an error
+// with exit code 2 and one line; --env overrides TESSERA_environment.
+TEST(EnvironmentLoading, CommandLineEnvironmentOverridesTheScene) {
+    std::filesystem::path dir = test::tempDir("environment-cli");
+    auto run = [&](const std::string& scene, const std::string& args, std::string& err) {
+        std::string cmd = "timeout 120 " + std::string(TESSERA_BINARY) + " render '" + scene + "' --quiet --no-png -o '" +
+                          (dir / "out.exr").string() + "' --resolution 8x8 --spp 2 --integrator pt " + args + " 2> '" +
+                          (dir / "err.txt").string() + "' > /dev/null";
+        int status = std::system(cmd.c_str());
+        std::ifstream in(dir / "err.txt");
+        err.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    };
+    // A scene of one small sphere, looking away from it: only the environment is seen.
+    std::string scene = (dir / "s.gltf").string();
+    std::ofstream(scene) << R"({"asset": {"version": "2.0"}, "extensionsUsed": ["TESSERA_sphere", "TESSERA_environment"],
+      "extensionsRequired": ["TESSERA_sphere"],
+      "extensions": {"TESSERA_environment": {"color": [9, 9, 9]}},
+      "scenes": [{"nodes": [0, 1]}], "scene": 0,
+      "cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.01}}],
+      "nodes": [{"camera": 0}, {"translation": [0, 0, 5], "extensions": {"TESSERA_sphere": {"radius": 0.5}}}]})";
+    std::string err;
+    ASSERT_EQ(run(scene, "--env 0.25,0.5,1 --env-intensity 2", err), 0) << err;
+    io::Image image = io::readImage((dir / "out.exr").string());
+    ASSERT_EQ(image.width, 8);
+    EXPECT_NEAR(image.rgba[0], 0.5f, 1e-6f);
+    EXPECT_NEAR(image.rgba[1], 1.f, 1e-6f);
+    EXPECT_NEAR(image.rgba[2], 2.f, 1e-6f);
+    ASSERT_EQ(run(scene, "--env-intensity 0.5", err), 0) << err;  // adjusts the scene's own (9, 9, 9)
+    EXPECT_NEAR(io::readImage((dir / "out.exr").string()).rgba[0], 4.5f, 1e-5f);
+    EXPECT_EQ(run(test::sourcePath("scenes/cornell-box/cornell-box.gltf"), "--env-rotate 30", err), 2);
+    EXPECT_NE(err.find("--env-rotate and --env-intensity need an environment"), std::string::npos) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_EQ(run(scene, "--env 1,2", err), 2);
+    EXPECT_NE(err.find("--env"), std::string::npos) << err;
 }

@@ -53,6 +53,7 @@ const ShippedScene kScenes[] = {
     {"furnace", "scenes/furnace/furnace.gltf", false, 4, true},
     {"spot-light", "scenes/spot-light/spot-light.gltf", false, 4, false},
     {"hdri-spheres", "scenes/hdri-spheres/hdri-spheres.gltf", false, 4, false, "pmndrs-hdri/sky.exr"},
+    {"hdri-sun", "scenes/hdri-spheres/hdri-sun.gltf", false, 4, false, "pmndrs-hdri/sky.exr"},
 };
 
 const char* const kIntegrators[] = {"pt", "ptnee", "lt", "bdpt"};

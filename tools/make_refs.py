@@ -74,6 +74,7 @@ SCENES = {
     "furnace": ("scenes/furnace/furnace.gltf", "64x64", "bdpt", 32, "ptnee", 64),
     "spot-light": ("scenes/spot-light/spot-light.gltf", "128x96", "bdpt", 256, "ptnee", 512),
     "hdri-spheres": ("scenes/hdri-spheres/hdri-spheres.gltf", "128x96", "bdpt", 256, "ptnee", 512),
+    "hdri-sun": ("scenes/hdri-spheres/hdri-sun.gltf", "128x96", "bdpt", 256, "ptnee", 512),
 }
 
 WHY = {
@@ -101,6 +102,8 @@ WHY = {
                   "the glossy sphere by BSDF sampling, bdpt also by light tracing",
     "hdri-spheres": "environment only (a small sun holds 2/3 of the light): ptnee and bdpt sample it by "
                     "luminance; the glass sphere's caustic comes from bdpt's light sub-paths (t=1)",
+    "hdri-sun": "environment only, no delta surfaces: every integrator samples every path (lt sees the sky "
+                "directly through camera rays); ptnee and bdpt importance-sample the sun, pt must hit it",
 }
 
 

@@ -16,7 +16,7 @@ one-line description):
       glass-dragon (the Stanford dragon via TESSERA_asset_mesh, not committed);
   failure-mode scenes: veach-mis, tiny-light-10 / -100, door-ajar,
       sds-caustic, point-light-specular, furnace;
-  light scenes: spot-light (spot + directional), hdri-spheres (environment).
+  light scenes: spot-light (spot + directional), hdri-spheres and hdri-sun (environment).
 
 Conventions (what Tessera's loader reads):
   * Materials: pbrMetallicRoughness with metallicFactor written explicitly
@@ -491,10 +491,15 @@ def spot_light():
 HDRI_SKY_ASSET = "pmndrs-hdri/sky.exr"
 
 
-def hdri_spheres():
-    g = Gltf("A diffuse, a glossy and a glass sphere on a floor lit only by the Poly Haven sky HDRI "
-             "(TESSERA_environment, asset pmndrs-hdri/sky.exr from tools/fetch_assets.sh, not committed): "
-             "a small sun holds 2/3 of its light, so environment importance sampling decides the noise.")
+def hdri_spheres(glass_sphere=True):
+    if glass_sphere:
+        g = Gltf("A diffuse, a glossy and a glass sphere on a floor lit only by the Poly Haven sky HDRI "
+                 "(TESSERA_environment, asset pmndrs-hdri/sky.exr from tools/fetch_assets.sh, not committed): "
+                 "a small sun holds 2/3 of its light, so environment importance sampling decides the noise.")
+    else:
+        g = Gltf("hdri-spheres without the glass sphere: a diffuse and a glossy sphere on a floor under the "
+                 "Poly Haven sky HDRI, whose small sun holds 2/3 of the light: environment importance "
+                 "sampling (ptnee, bdpt) against BSDF sampling alone (pt).")
     floor = g.material("floor", base=(0.6, 0.6, 0.6))
     diffuse = g.material("diffuse", base=(0.2, 0.45, 0.8))
     glossy = g.material("glossy copper", base=(0.95, 0.64, 0.54), metallic=1.0, roughness=0.25)
@@ -503,7 +508,8 @@ def hdri_spheres():
     g.quads("floor", [floor_quad(5.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
     g.sphere("diffuse sphere", (-1.15, 0.5, 0.0), 0.5, diffuse)
     g.sphere("glossy sphere", (0.0, 0.5, -0.4), 0.5, glossy)
-    g.sphere("glass sphere", (1.15, 0.5, 0.2), 0.5, glass)
+    if glass_sphere:
+        g.sphere("glass sphere", (1.15, 0.5, 0.2), 0.5, glass)
     g.environment(asset=HDRI_SKY_ASSET, intensity=0.4)
     eye, target = (0.0, 1.3, 4.2), (0.0, 0.45, 0.0)
     g.camera("camera", yfov=math.radians(38.0), aspect=4.0 / 3.0, znear=0.01,
@@ -581,7 +587,8 @@ SCENE_LIST = [
     ("point-light-specular", "point-light-specular", point_light_specular, True),
     ("furnace", "furnace", furnace, False),
     ("spot-light", "spot-light", spot_light, True),
-    ("hdri-spheres", "hdri-spheres", hdri_spheres, True),
+    ("hdri-spheres", "hdri-spheres", lambda: hdri_spheres(True), True),
+    ("hdri-spheres", "hdri-sun", lambda: hdri_spheres(False), True),
 ]
 
 

@@ -202,6 +202,70 @@ def load_cache(path, key):
     return part if part.get("key") == key else None
 
 
+_INT_FIELDS = {"spp", "seed", "width", "height", "renders", "nonfinite_samples", "nonfinite_pixels"}
+_STR_FIELDS = {"scene", "integrator", "accel", "spp_series", "verdict"}
+
+
+def _typed(row):
+    out = {}
+    for k, v in row.items():
+        if k in _STR_FIELDS:
+            out[k] = v
+        elif k in _INT_FIELDS:
+            out[k] = int(v)
+        elif k == "ref_limited":
+            out[k] = v == "True"
+        else:
+            out[k] = float(v) if v not in ("", "nan") else float("nan")
+    return out
+
+
+def seed_cache_from_tables(args, refs, integrators, accels):
+    """--seed-cache: writes a cache entry (as --resume reads it) for every scene that has rows in the
+    tables already in --out (runs.csv, summary.csv, the per-scene notes of stability.md) and no
+    cache entry yet, keyed on today's reference, scene and settings. A following --resume then
+    renders only the scenes that are new or changed, and the tables keep every other scene's rows:
+    how a committed study gains a scene without re-running 35 minutes of renders."""
+    import csv
+    try:
+        with open(os.path.join(args.out, "runs.csv")) as f:
+            runs = [_typed(r) for r in csv.DictReader(f)]
+        with open(os.path.join(args.out, "summary.csv")) as f:
+            summary = [_typed(r) for r in csv.DictReader(f)]
+    except OSError as e:
+        log(f"study: --seed-cache: no tables in {args.out} ({e}); nothing seeded")
+        return
+    scene_notes = []
+    try:
+        with open(os.path.join(args.out, "stability.md")) as f:
+            scene_notes = [line[2:].strip() for line in f if line.startswith("- ")]
+    except OSError:
+        pass
+    minutes_total = 0.0
+    try:
+        with open(os.path.join(args.out, "study.json")) as f:
+            minutes_total = float(json.load(f).get("minutes", 0.0))
+    except (OSError, ValueError):
+        pass
+    seconds_all = sum(r["seconds"] for r in runs) or 1.0
+    os.makedirs(args.cache, exist_ok=True)
+    for ref in refs:
+        path = os.path.join(args.cache, f"{ref.name}.json")
+        rows = [r for r in runs if r["scene"] == ref.name]
+        sums = [s for s in summary if s["scene"] == ref.name]
+        if os.path.exists(path) or not rows or not sums:
+            continue
+        for s in sums:
+            s.pop("verdict", None)  # recomputed with the other rows of the scene
+        part = {"runs": rows, "summary": sums, "floor": sums[0]["ref_floor"], "failures": [],
+                "notes": [n for n in scene_notes if n.startswith(ref.name + ":")],
+                "key": cache_key(args, ref, integrators, accels),
+                "minutes": minutes_total * sum(r["seconds"] for r in rows) / seconds_all}
+        with open(path, "w") as f:
+            json.dump(part, f)
+        log(f"study: {ref.name}: cache seeded from {args.out}/ ({len(rows)} renders)")
+
+
 def run(args, tess, refs, notes, argv):
     t_start = time.time()
     args.binary = tess.binary
@@ -211,6 +275,8 @@ def run(args, tess, refs, notes, argv):
         accels = [DEFAULT_ACCEL] + accels
     command = "tools/study " + " ".join(shlex.quote(a) for a in argv)
     all_runs, summary, failures, floors, minutes = [], [], [], {}, 0.0
+    if args.seed_cache:
+        seed_cache_from_tables(args, refs, integrators, accels)
     os.makedirs(args.out, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="study-") as tmp:
         for ref in refs:
