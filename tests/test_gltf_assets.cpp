@@ -364,7 +364,10 @@ TEST(WebxrAssets, EveryModelLoadsAndItsWarningsAreListed) {
             ADD_FAILURE() << name << ": " << e.what();
         }
         if (!warnings.empty()) ++warned;
-        for (const std::string& w : warnings) std::cout << "  " << name << ": " << w.substr(w.rfind(".glb: ") + 6) << "\n";
+        for (const std::string& w : warnings) {
+            size_t afterFile = w.find(*path) == 0 ? path->size() + 2 : 0;  // "FILE: " is the name already printed
+            std::cout << "  " << name << ": " << w.substr(std::min(afterFile, w.size())) << "\n";
+        }
     }
     std::cout << names.size() << " models, " << triangles << " triangles, " << warned << " with warnings\n";
 }
