@@ -339,14 +339,15 @@ std::vector<std::string> webxrAssets(const fs::path& packageFolder) {
 }  // namespace
 
 // The load survey: each of the 82 controller models loads with no error, has triangles and a
-// controller's size (1 cm to 50 cm across: units and node transforms read right); the warnings are
-// printed, one block per file. Textures render only where the texture layer reads them.
+// controller's size (1 cm to 50 cm across: units and node transforms read right), and renders (two
+// 16x12 ptnee images at 2 spp from cameras framing it) without a non-finite sample; the emissive
+// models give a non-black image. The warnings are printed, one block per file.
 TEST(WebxrAssets, EveryModelLoadsAndItsWarningsAreListed) {
     std::optional<std::string> license = test::findTestAsset(kWebxrLicense);
     if (!license) GTEST_SKIP() << test::missingAssetMessage(kWebxrLicense);
     std::vector<std::string> names = webxrAssets(fs::path(*license).parent_path());
     EXPECT_EQ(names.size(), 82u) << "the package has 82 GLBs: is the cache complete? (tools/fetch_assets.sh)";
-    size_t warned = 0, triangles = 0;
+    size_t warned = 0, triangles = 0, emissive = 0;
     for (const std::string& name : names) {
         std::optional<std::string> path = test::findTestAsset(name);
         ASSERT_TRUE(path.has_value()) << name;
@@ -360,6 +361,26 @@ TEST(WebxrAssets, EveryModelLoadsAndItsWarningsAreListed) {
             EXPECT_GT(tris, 100u) << name;  // the smallest, google-daydream, has 292
             float extent = glm::length(b.upper - b.lower);
             EXPECT_TRUE(extent > 0.01f && extent < 0.5f) << name << ": extent " << extent << " m";
+            // Seen from behind-above and from front-above (grip space: −z points forward), where
+            // the LEDs of the emissive models face.
+            Vec3f centre = 0.5f * (b.lower + b.upper);
+            double sum = 0;
+            for (Vec3f dir : {Vec3f(0.6f, 0.5f, 1.f), Vec3f(-0.6f, 0.5f, -1.f)}) {
+                Vec3f eye = centre + extent * glm::normalize(dir);
+                s.camera = CameraDesc{};
+                s.camera->cameraToWorld = glm::inverse(glm::lookAt(eye, centre, Vec3f(0.f, 1.f, 0.f)));
+                s.camera->yfov = 0.9f;
+                test::TestRender r = test::renderScene(s, "ptnee", 16, 12, RenderOptions{.spp = 2, .threads = 1, .seed = 3});
+                EXPECT_EQ(r.stats.nonFiniteDropped, 0u) << name;
+                for (float v : r.film.rgba()) {
+                    ASSERT_TRUE(std::isfinite(v)) << name;
+                    sum += v;
+                }
+            }
+            if (s.lights().size() > 0) {
+                ++emissive;
+                EXPECT_GT(sum, 2 * 16.0 * 12.0) << name << ": emissive, yet black (alpha alone sums to 384)";
+            }
         } catch (const std::exception& e) {
             ADD_FAILURE() << name << ": " << e.what();
         }
@@ -369,7 +390,8 @@ TEST(WebxrAssets, EveryModelLoadsAndItsWarningsAreListed) {
             std::cout << "  " << name << ": " << w.substr(std::min(afterFile, w.size())) << "\n";
         }
     }
-    std::cout << names.size() << " models, " << triangles << " triangles, " << warned << " with warnings\n";
+    std::cout << names.size() << " models, " << triangles << " triangles, " << emissive << " emissive, " << warned
+              << " with warnings\n";
 }
 
 // A scene importing a model by TESSERA_asset_gltf holds exactly the model's triangles, moved by the node.
