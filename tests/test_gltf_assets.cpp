@@ -1,7 +1,7 @@
 // glTF files from elsewhere: unsupported extensions are named (an error when required, one warning
 // line when only used), KHR_mesh_quantization's integer attributes are read, TESSERA_asset_gltf
-// imports an asset under its node, and every WebXR controller model of the fetched
-// @webxr-input-profiles/assets package loads (the load survey).
+// imports an asset under its node, every WebXR controller model of the fetched
+// @webxr-input-profiles/assets package loads (the load survey), and the fetched HDRIs decode.
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -17,6 +17,7 @@
 #include "core/error.h"
 #include "scene/gltf_loader.h"
 #include "test_helpers.h"
+#include "texture/image.h"
 
 using namespace tessera;
 namespace fs = std::filesystem;
@@ -431,5 +432,36 @@ TEST(WebxrAssets, SceneImportEqualsTheModelUnderTheNodeTransform) {
             Vec3f expect = Vec3f(node * glm::dvec4(Vec3d(a.positions[v]), 1.0));
             EXPECT_LT(glm::length(b.positions[v] - expect), 1e-5f) << a.name << " vertex " << v;
         }
+    }
+}
+
+// The 18 Poly Haven HDRIs that tools/fetch_assets.sh decodes from @pmndrs/assets' base64 modules
+// are whole EXRs: 512x256, finite, high dynamic range (max > 1), not black. Their DWAB compression
+// is lossy: ringing around the sun leaves negative texels in every one of them (17 to 6,524 of the
+// 131,072; esplanade down to −3894 next to +29,860), so an environment light must clamp them to 0.
+TEST(FetchedHdris, AllEighteenDecodeAs512By256RadianceImages) {
+    const char* const names[] = {"apartment", "bridge", "city",  "dawn",  "esplanade", "forest",
+                                 "hall",      "lab",    "lobby", "night", "park",      "sky",
+                                 "studio",    "sunrise", "sunset", "venice", "warehouse", "workshop"};
+    for (const char* n : names) {
+        const std::string name = std::string("pmndrs-hdri/") + n + ".exr";
+        std::optional<std::string> path = test::findTestAsset(name);
+        if (!path) GTEST_SKIP() << test::missingAssetMessage(name);
+        Image image = readImageFile(*path, ColorEncoding::Linear);
+        ASSERT_EQ(image.width(), 512) << name;
+        ASSERT_EQ(image.height(), 256) << name;
+        double sum = 0, maxValue = 0;
+        size_t negative = 0;
+        for (const Vec4f& t : image.levels[0].texels) {
+            for (int c = 0; c < 3; ++c) {
+                ASSERT_TRUE(std::isfinite(t[c])) << name;
+                sum += std::max(t[c], 0.f);
+                maxValue = std::max(maxValue, double(t[c]));
+            }
+            negative += (t.x < 0.f || t.y < 0.f || t.z < 0.f) ? 1 : 0;
+        }
+        EXPECT_GT(sum / (3.0 * 512 * 256), 0.03) << name << " is nearly black";
+        EXPECT_GT(maxValue, 1.0) << name << " is not high dynamic range";
+        EXPECT_LT(negative, 512u * 256u / 16) << name << ": " << negative << " negative texels";
     }
 }

@@ -20,6 +20,8 @@
 #       Haven HDRIs, 512x256 half-float OpenEXR, which the package stores base64-encoded inside
 #       package/hdri/NAME.exr.js (one line: export default 'data:application/exr;base64,...');
 #       decoded here and kept as pmndrs-hdri/NAME.exr (the sums are those of the decoded EXRs).
+#       Their DWAB compression is lossy: every one has some negative texels (ringing next to the
+#       sun), which a reader must clamp to 0.
 # The cache is $TESSERA_CACHE, else $XDG_CACHE_HOME/tessera, else $HOME/.cache/tessera: the same
 # folder the renderer searches after TESSERA_ASSETS (src/scene/assets.h). Files that a folder of
 # TESSERA_ASSETS already holds are not fetched; a package is fetched only when one of its files is
