@@ -319,6 +319,32 @@ TEST(GltfAsset, ErrorsNameTheNodeTheAssetAndTheProblem) {
     EXPECT_NE(broken2.error.find("accessors[1]"), std::string::npos) << broken2.error;
 }
 
+// Every reference counts towards the limit on bytes read (--max-memory): a small scene naming an
+// asset many times is refused at the reference that crosses it.
+TEST(GltfAsset, RepeatedReferencesCountTowardsTheByteLimit) {
+    fs::path root = makeAssetRoot("asset-budget");
+    const std::string node = R"({"extensions": {"TESSERA_asset_gltf": {"asset": "kit/part.gltf"}}})";
+    fs::path scenePath = root.parent_path() / "scene.gltf";
+    writeText(scenePath, R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 1, 2]}],
+      "nodes": [)" + node + "," + node + "," + node + "]}");
+    const uint64_t assetSize = fs::file_size(root / "kit" / "part.gltf");
+    SceneLoadOptions options;
+    options.assetRoots = {root.string()};
+    options.maxFileBytes = 2 * assetSize + assetSize / 2;  // two references fit, the third does not
+    ASSERT_LT(fs::file_size(scenePath), options.maxFileBytes);
+    std::vector<std::string> warnings;
+    try {
+        loadGltfScene(scenePath.string(), warnings, options);
+        FAIL() << "the third reference must cross the limit";
+    } catch (const SceneError& e) {
+        std::string msg = e.what();
+        EXPECT_NE(msg.find("nodes[2].extensions.TESSERA_asset_gltf"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("over the limit of " + std::to_string(options.maxFileBytes)), std::string::npos) << msg;
+    }
+    options.maxFileBytes = 3 * assetSize;
+    EXPECT_EQ(loadGltfScene(scenePath.string(), warnings, options).geometry.meshes.size(), 3u);
+}
+
 // ===== The WebXR input-profile assets (fetched by tools/fetch_assets.sh) ===========================
 
 namespace {

@@ -8,7 +8,7 @@
 namespace tessera {
 
 std::string resolveAssetOrThrow(const std::string& name, const std::vector<std::string>& roots, uint64_t maxBytes,
-                                const std::string& sceneFile, const std::string& element) {
+                                uint64_t& bytesSoFar, const std::string& sceneFile, const std::string& element) {
     if (!isValidAssetName(name))
         throw SceneError(sceneFile, element,
                          "asset name '" + name + "' must be a relative path of [A-Za-z0-9._-] components without '..'");
@@ -22,7 +22,12 @@ std::string resolveAssetOrThrow(const std::string& name, const std::vector<std::
     }
     std::error_code ec;
     uint64_t size = std::filesystem::file_size(*file, ec);
-    if (ec || size > maxBytes) throw SceneError(sceneFile, element, "asset '" + *file + "' is unreadable or over the file-size limit");
+    if (ec) throw SceneError(sceneFile, element, "asset '" + *file + "' is unreadable");
+    if (size > maxBytes || bytesSoFar > maxBytes - size)
+        throw SceneError(sceneFile, element,
+                         "asset '" + name + "' (" + std::to_string(size) + " bytes) takes the scene's assets to " +
+                             std::to_string(bytesSoFar + size) + " bytes, over the limit of " + std::to_string(maxBytes));
+    bytesSoFar += size;
     return *file;
 }
 

@@ -19,9 +19,11 @@ struct SceneLoadOptions;
 
 /// The path of asset `name` in `roots`, or a SceneError naming `sceneFile`, `element` and the
 /// problem: an invalid name (absolute, '..', odd characters), an asset in no asset folder (with the
-/// folders searched and how to fetch it), or a file over `maxBytes`.
+/// folders searched and how to fetch it), or a file that would take `bytesSoFar` (the asset bytes
+/// the scene has read so far, which the file's size is added to) over `maxBytes`. Every reference
+/// counts, so a small scene naming a large asset ten thousand times is refused like a large file.
 std::string resolveAssetOrThrow(const std::string& name, const std::vector<std::string>& roots, uint64_t maxBytes,
-                                const std::string& sceneFile, const std::string& element);
+                                uint64_t& bytesSoFar, const std::string& sceneFile, const std::string& element);
 
 /// Appends `asset` (already placed in `into`'s world space) to `into`: its materials after
 /// `into`'s (every mesh's and sphere's materialId offset by the count before), its images (moved:

@@ -127,10 +127,12 @@ constexpr int kMaxAssetNesting = 8;
 class Loader {
 public:
     /// `root` places the file's scene (identity for a scene; the naming node's world transform for
-    /// a TESSERA_asset_gltf asset, which `nesting` counts).
+    /// a TESSERA_asset_gltf asset, which `nesting` counts); `assetBytes` is the scene's running total
+    /// of asset bytes read (null: this loader keeps its own).
     Loader(std::string path, std::vector<std::string>& warnings, const SceneLoadOptions& options, const Mat4d& root = Mat4d(1.0),
-           int nesting = 0)
-        : path_(std::move(path)), warnings_(warnings), options_(options), root_(root), nesting_(nesting) {}
+           int nesting = 0, uint64_t* assetBytes = nullptr)
+        : path_(std::move(path)), warnings_(warnings), options_(options), root_(root), nesting_(nesting),
+          assetBytes_(assetBytes ? assetBytes : &ownAssetBytes_) {}
 
     Scene load() {
         Scene scene = loadUnfinalized();
@@ -525,7 +527,7 @@ private:
                 fail(el, "'material' must index materials[]");
             materialId = uint32_t(mat);
         }
-        const std::string file = resolveAssetOrThrow(name, options_.assetRoots, options_.maxFileBytes, path_, el);
+        const std::string file = resolveAssetOrThrow(name, options_.assetRoots, options_.maxFileBytes, *assetBytes_, path_, el);
         std::string lower = name;
         for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
         auto endsWith = [&](const char* suffix) {
@@ -560,7 +562,7 @@ private:
     void readAssetGltf(const gl::Value& v, const Mat4d& world, const std::string& el) {
         if (!v.IsObject() || !v.Has("asset") || !v.Get("asset").IsString()) fail(el, "needs an 'asset' name (string)");
         const std::string name = v.Get("asset").Get<std::string>();
-        const std::string file = resolveAssetOrThrow(name, options_.assetRoots, options_.maxFileBytes, path_, el);
+        const std::string file = resolveAssetOrThrow(name, options_.assetRoots, options_.maxFileBytes, *assetBytes_, path_, el);
         std::string lower = name;
         for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
         if (!lower.ends_with(".glb") && !lower.ends_with(".gltf")) fail(el, "asset '" + name + "': only .glb and .gltf files are supported");
@@ -568,7 +570,7 @@ private:
             fail(el, "assets nested deeper than " + std::to_string(kMaxAssetNesting) + " (does an asset name itself?)");
         Scene asset;
         try {
-            asset = Loader(file, warnings_, options_, world, nesting_ + 1).loadUnfinalized();
+            asset = Loader(file, warnings_, options_, world, nesting_ + 1, assetBytes_).loadUnfinalized();
         } catch (const SceneError& e) {
             fail(el, "asset '" + name + "': " + e.what());
         }
@@ -723,6 +725,8 @@ private:
     SceneLoadOptions options_;
     Mat4d root_;
     int nesting_ = 0;
+    uint64_t ownAssetBytes_ = 0;
+    uint64_t* assetBytes_;  ///< bytes of asset files read by the whole scene load (nested loaders share it)
     gl::Model model_;
     Scene scene_;
     uint32_t defaultMaterial_ = 0;
