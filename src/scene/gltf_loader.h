@@ -30,8 +30,11 @@ struct SceneLoadOptions {
     /// symlinks pointing out). Off by default: a scene file must not read arbitrary files.
     bool allowExternalFiles = false;
     /// Largest file (scene or buffer) read, in bytes. data: URIs are bounded by the scene file's size.
+    /// The asset files a scene names (TESSERA_asset_mesh, TESSERA_asset_gltf) count together, every
+    /// reference again.
     uint64_t maxFileBytes = uint64_t(4) << 30;
-    /// Folders where TESSERA_asset_mesh names are looked up (never the scene's own URIs).
+    /// Folders where TESSERA_asset_mesh and TESSERA_asset_gltf names are looked up (never the scene's
+    /// own URIs).
     std::vector<std::string> assetRoots = defaultAssetRoots();
 };
 
