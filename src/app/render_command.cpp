@@ -430,6 +430,9 @@ int runRender(const RenderArgs& a) {
     RenderStats stats = renderImage(ctx, *integrator, film, ro);
 
     io::Metadata md = outputMetadata(a, s, *integrator, *accel, stats);
+    if (scene.environment)
+        md.push_back({"tessera:environment", scene.environment->source + " rotation " + std::to_string(scene.environment->rotationDeg) +
+                                                 " intensity " + std::to_string(scene.environment->intensity)});
     std::vector<float> rgba = film.rgba();
     io::writeExr(out.exr, s.width, s.height, rgba.data(), md);
     if (out.display) io::writePng(out.png, s.width, s.height, rgba.data(), *out.display, md);

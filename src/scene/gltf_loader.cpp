@@ -548,6 +548,7 @@ private:
             std::optional<std::string> found = resolveAsset(name, options_.assetRoots);
             if (!found) fail(el, "asset '" + name + "' not found in the asset folders; run tools/fetch_assets.sh or set TESSERA_ASSETS");
             file = *found;
+            env.source = "asset " + name;
         }
         if (!file.empty()) {
             std::error_code ec;
@@ -561,7 +562,7 @@ private:
             }
             scene_.images.push_back(std::move(image));
             env.image = scene_.images.back().get();
-            env.source = file;
+            if (env.source == "constant") env.source = v.Get("image").Get<std::string>();  // as the scene names it
         }
         scene_.environment = env;
     }
