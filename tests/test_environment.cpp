@@ -404,3 +404,21 @@ TEST(EnvironmentLoading, CommandLineEnvironmentOverridesTheScene) {
     EXPECT_EQ(run(scene, "--env 1,2", err), 2);
     EXPECT_NE(err.find("--env"), std::string::npos) << err;
 }
+
+// Light sub-paths from the environment and lt's camera rays keep renders bit-identical for any
+// thread count.
+TEST(EnvironmentDeterminism, LtAndBdptGiveTheSameBitsForOneAndTwoThreads) {
+    std::unique_ptr<Image> image = test::spotAndGradientImage();
+    Scene scene = convexObjectUnderEnvironment(Rgb(0.6f), Rgb(1.f), false);
+    scene.environment->image = image.get();
+    scene.finalize();
+    scene.camera = lookAtCamera(Vec3f(0.f, 0.5f, 4.f), Vec3f(0.f), 0.9f);
+    for (const char* name : {"lt", "bdpt", "ptnee"}) {
+        std::vector<float> images[2];
+        for (int threads : {1, 2}) {
+            test::TestRender r = test::renderScene(scene, name, 24, 20, RenderOptions{.spp = 4, .threads = threads, .seed = 3, .tileSize = 16});
+            images[threads - 1] = r.film.rgba();
+        }
+        EXPECT_EQ(images[0], images[1]) << name;
+    }
+}

@@ -5,10 +5,12 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <fstream>
+
 #include "integrators/integrator.h"
-#include "texture/texture.h"
 #include "render/renderer.h"
 #include "scene/gltf_loader.h"
+#include "texture/texture.h"
 #include "test_agreement.h"
 #include "test_helpers.h"
 
@@ -270,4 +272,32 @@ TEST(TexturedEmitter, EmissionFollowsTheTextureAndSelectionItsPower) {
     // The floor under the emitter, through every strategy that finds a textured emitter.
     scene.camera = lookAtCameraDown();
     test::expectIntegratorsAgree(scene, {{"ptnee", 8}, {"pt", 32}, {"lt", 16}, {"bdpt", 4}}, 32, 32, 24);
+}
+
+// Lights inside an imported glTF asset (TESSERA_asset_gltf) come along with it, placed by the
+// importing node's transform: a spot light keeps its cone, a directional light its direction.
+TEST(PunctualLights, SpotAndDirectionalLightsOfAnImportedAssetAreKept) {
+    std::filesystem::path dir = test::tempDir("asset-lights");
+    std::filesystem::create_directories(dir / "assets" / "lamp");
+    std::ofstream(dir / "assets" / "lamp" / "lamp.gltf") << R"({"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_lights_punctual"],
+      "extensions": {"KHR_lights_punctual": {"lights": [
+        {"type": "spot", "intensity": 2.0, "spot": {"innerConeAngle": 0.1, "outerConeAngle": 0.3}},
+        {"type": "directional", "intensity": 0.5}]}},
+      "scenes": [{"nodes": [0, 1]}], "scene": 0,
+      "nodes": [{"translation": [0, 1, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                {"extensions": {"KHR_lights_punctual": {"light": 1}}}]})";
+    std::string scenePath = (dir / "scene.gltf").string();
+    std::ofstream(scenePath) << R"({"asset": {"version": "2.0"}, "extensionsUsed": ["TESSERA_asset_gltf"],
+      "scenes": [{"nodes": [0]}], "scene": 0,
+      "nodes": [{"translation": [3, 0, 0], "extensions": {"TESSERA_asset_gltf": {"asset": "lamp/lamp.gltf"}}}]})";
+    std::vector<std::string> warnings;
+    SceneLoadOptions options;
+    options.assetRoots = {(dir / "assets").string()};
+    Scene scene = loadGltfScene(scenePath, warnings, options);
+    ASSERT_EQ(scene.spotLights.size(), 1u);
+    EXPECT_EQ(scene.spotLights[0].position, Vec3f(3.f, 1.f, 0.f));
+    EXPECT_FLOAT_EQ(scene.spotLights[0].outerConeAngle, 0.3f);
+    ASSERT_EQ(scene.directionalLights.size(), 1u);
+    EXPECT_EQ(scene.directionalLights[0].irradiance, Rgb(0.5f));
+    EXPECT_EQ(scene.lights().size(), 2u);
 }

@@ -46,6 +46,8 @@ void appendAssetScene(Scene& into, Scene&& asset) {
         into.geometry.spheres.push_back(std::move(sphere));
     }
     for (const PointLightDesc& light : asset.pointLights) into.pointLights.push_back(light);
+    for (const SpotLightDesc& light : asset.spotLights) into.spotLights.push_back(light);
+    for (const DirectionalLightDesc& light : asset.directionalLights) into.directionalLights.push_back(light);
 }
 
 }  // namespace tessera

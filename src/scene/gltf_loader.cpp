@@ -540,20 +540,16 @@ private:
             access.options = options_;
             if (!access.allowed(file)) fail(el, access.violation.empty() ? "cannot resolve '" + uri + "'" : access.violation);
             if (!std::filesystem::is_regular_file(file, ec)) fail(el, "image '" + uri + "' not found");
+            uint64_t size = std::filesystem::file_size(file, ec);
+            if (ec || size > options_.maxFileBytes) fail(el, "'" + uri + "' is unreadable or over the file-size limit");
         } else if (v.Has("asset")) {
             if (!v.Get("asset").IsString()) fail(el, "'asset' must be a string");
             std::string name = v.Get("asset").Get<std::string>();
-            if (!isValidAssetName(name))
-                fail(el, "asset name '" + name + "' must be a relative path of [A-Za-z0-9._-] components without '..'");
-            std::optional<std::string> found = resolveAsset(name, options_.assetRoots);
-            if (!found) fail(el, "asset '" + name + "' not found in the asset folders; run tools/fetch_assets.sh or set TESSERA_ASSETS");
-            file = *found;
+            // The one asset resolution (name rules, folders, the scene's running byte total).
+            file = resolveAssetOrThrow(name, options_.assetRoots, options_.maxFileBytes, *assetBytes_, path_, el);
             env.source = "asset " + name;
         }
         if (!file.empty()) {
-            std::error_code ec;
-            uint64_t size = std::filesystem::file_size(file, ec);
-            if (ec || size > options_.maxFileBytes) fail(el, "'" + file + "' is unreadable or over the file-size limit");
             std::unique_ptr<Image> image;
             try {
                 image = readEnvironmentImage(file);
