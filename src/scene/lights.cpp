@@ -75,8 +75,13 @@ void LightSet::build(const SceneGeometry& geometry, const std::vector<Material>&
                                                        mesh.positions[t.z] - mesh.positions[t.x]));
             Light l{LightType::Triangle, g, i, mat.emission, mat.doubleSided, area};
             lights_.push_back(l);
-            Rgb radiance = tex.valid() ? mat.emission * meanTextureOverTriangle(tex, mesh, tex.texCoord, i) : mat.emission;
-            power.push_back(luminance(radiance) * area * kPi * (mat.doubleSided ? 2.f : 1.f));
+            // A textured triangle keeps at least 1/1000 of its untextured power: its 16 lookups may all
+            // miss a small bright texel, and a light that emits with selection probability 0 would
+            // break BDPT's weights (its density 0 reads as a delta there); next-event estimation
+            // alone would stay unbiased through BSDF hits.
+            float lum = luminance(mat.emission);
+            if (tex.valid()) lum = std::max(luminance(mat.emission * meanTextureOverTriangle(tex, mesh, tex.texCoord, i)), 1e-3f * lum);
+            power.push_back(lum * area * kPi * (mat.doubleSided ? 2.f : 1.f));
         }
     }
     for (uint32_t i = 0; i < geometry.spheres.size(); ++i) {
