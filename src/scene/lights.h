@@ -14,7 +14,6 @@
 /// light sub-paths start on a disk of the scene's bounding radius r perpendicular to the direction,
 /// with the planar density 1/(π r²) (pbrt-v4 §12.5, Veach 1997 §10.2). A directional light is a delta
 /// in direction: it can be neither hit nor sampled by a BSDF.
-#include <optional>
 #include <vector>
 
 #include "core/distribution.h"
