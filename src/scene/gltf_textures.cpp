@@ -251,7 +251,10 @@ const Image* GltfTextureReader::image(int index, ColorEncoding encoding, const s
         size = bv.byteLength;
     } else if (size == 0) {
         if (gi.uri.empty()) fail(iel, "image has no data");
-        std::filesystem::path file = std::filesystem::path(path_).parent_path() / percentDecoded(gi.uri);
+        std::string relative = percentDecoded(gi.uri);
+        if (std::filesystem::path(relative).is_absolute() || relative.find(':') != std::string::npos)
+            fail(iel, "image URI '" + gi.uri + "' is not a relative path (glTF file URIs are relative to the scene's folder)");
+        std::filesystem::path file = std::filesystem::path(path_).parent_path() / relative;
         std::string why = whyUnreadable_(file.string());
         std::error_code ec;
         if (!why.empty()) fail(iel, why);
@@ -266,7 +269,10 @@ const Image* GltfTextureReader::image(int index, ColorEncoding encoding, const s
     try {
         decoded = decodeImage(name, bytes, size, encoding, limits);
     } catch (const InputError& e) {
-        fail(el, std::string(e.what()) + (left < ImageDecodeLimits{}.maxBytes ? " (memory left for images under --max-memory: " +
+        std::string what = e.what();  // decoders' messages may span lines; the error is one line
+        for (char& c : what)
+            if (c == '\n') c = ';';
+        fail(el, what + (left < ImageDecodeLimits{}.maxBytes ? " (memory left for images under --max-memory: " +
                                                                                      std::to_string(left) + " bytes)"
                                                                                : ""));
     }
