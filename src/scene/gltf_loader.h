@@ -6,10 +6,15 @@
 ///   TESSERA_thin_lens (camera): {apertureRadius, focusDistance}
 ///   TESSERA_asset_mesh (node): {asset, material}: a PLY (.gz too) or OBJ mesh that is not committed,
 ///     named relative to the asset folders (scene/assets.h), placed by the node's transform
-/// Material mapping (model no more than the scenes need): KHR_materials_transmission > 0 → smooth
-/// dielectric (KHR_materials_ior, default 1.5); metallicFactor ≥ 0.5 → mirror (roughness 0) or GGX
-/// conductor (α = roughness²) with F0 = baseColor; otherwise Lambertian with albedo = baseColor.
+/// Materials: every glTF factor goes into BsdfParams (finalizeBsdfParams picks the BSDF);
 /// emissiveFactor × KHR_materials_emissive_strength makes every surface of the material a light.
+/// Textures (scene/gltf_textures.h): baseColor, metallicRoughness, normal, emissive, and the
+/// transmission/specular/specularColor textures of their extensions, with samplers,
+/// KHR_texture_transform, TEXCOORD_0/_1; images are decoded once by decodeImage (GLB buffer views,
+/// data URIs, files in the scene's folder), colour slots as sRGB. occlusionTexture is ignored (a
+/// path tracer computes occlusion). alphaMode MASK (and BLEND, as MASK at 0.5 with a warning) gives
+/// the meshes a shared AlphaMask. A normal texture without TANGENT gets MikkTSpace tangents
+/// (scene/tangents.h).
 /// Errors throw SceneError naming the file, the element (e.g. "meshes[3].primitives[0]") and the problem.
 #include <string>
 #include <vector>
@@ -24,7 +29,8 @@ struct SceneLoadOptions {
     /// Allow buffer/image URIs that resolve outside the scene's folder (`..`, absolute paths,
     /// symlinks pointing out). Off by default: a scene file must not read arbitrary files.
     bool allowExternalFiles = false;
-    /// Largest file (scene or buffer) read, in bytes. data: URIs are bounded by the scene file's size.
+    /// Largest file (scene, buffer or image) read, in bytes. data: URIs are bounded by the scene
+    /// file's size. Also the most that all decoded images together may take (--max-memory sets it).
     uint64_t maxFileBytes = uint64_t(4) << 30;
     /// Folders where TESSERA_asset_mesh names are looked up (never the scene's own URIs).
     std::vector<std::string> assetRoots = defaultAssetRoots();

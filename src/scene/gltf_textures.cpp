@@ -65,9 +65,11 @@ const gl::Value* transformOf(const gl::ExtensionMap& extensions) {
     return it == extensions.end() ? nullptr : &it->second;
 }
 
+/// A textureInfo the file gives (tinygltf leaves index at −1 when the slot is absent; any other
+/// negative index is the file's and is reported as out of range).
 template <class Info>
 bool present(const Info& info) {
-    return info.index >= 0 || !info.extensions.empty();
+    return info.index != -1 || !info.extensions.empty();
 }
 
 }  // namespace
