@@ -179,8 +179,10 @@ TEST(GltfTextures, GlbViewDataUriAndFileImagesDecodeAlike) {
 }
 
 // On a planar grid whose uv is a rotation and anisotropic scale of its position, the tangent is
-// known exactly: generated tangents must equal the file's. Under a mirroring node transform the
-// bitangent w · (N × T) must still point along the world-space ∂p/∂v, for both.
+// known exactly, and the file's TANGENT is what an exporter's MikkTSpace writes (w = −1: the map
+// preserves orientation in glTF's v-down uv, so B = w · N × T points up the image, along −∂p/∂v).
+// Generated tangents must equal the file's; under a mirroring node transform the bitangent must
+// still point along the world-space −∂p/∂v, for both.
 TEST(GltfTextures, GeneratedTangentsMatchTheFilesTangents) {
     auto dir = test::tempDir("gltf-tangents");
     const int n = 5;
@@ -193,7 +195,7 @@ TEST(GltfTextures, GeneratedTangentsMatchTheFilesTangents) {
             nrm.insert(nrm.end(), {0.f, 0.f, 1.f});
             uv.insert(uv.end(), {su * (c * x - s * y), sv * (s * x + c * y)});
             Vec3f t = glm::normalize(Vec3f(c, -s, 0.f));  // ∂p/∂u = Rᵀ (1/su, 0)
-            tan.insert(tan.end(), {t.x, t.y, t.z, 1.f});
+            tan.insert(tan.end(), {t.x, t.y, t.z, -1.f});
         }
     std::vector<uint32_t> ix;
     for (int j = 0; j < n; ++j)
@@ -225,7 +227,7 @@ TEST(GltfTextures, GeneratedTangentsMatchTheFilesTangents) {
             Vec3f dpdv = glm::normalize(Vec3f(mirrored ? -s : s, c, 0.f));
             for (size_t v = 0; v < m.tangents.size(); ++v) {
                 Vec3f bitangent = m.tangents[v].w * glm::cross(m.normals[v], Vec3f(m.tangents[v]));
-                EXPECT_GT(glm::dot(bitangent, dpdv), 0.999f) << "mirrored " << mirrored << " file " << withFile << " vertex " << v;
+                EXPECT_GT(glm::dot(bitangent, -dpdv), 0.999f) << "mirrored " << mirrored << " file " << withFile << " vertex " << v;
             }
         }
         ASSERT_EQ(tangents[0].size(), tangents[1].size());

@@ -40,7 +40,8 @@ TriangleMesh planarGrid(int n, UvFn uvOf) {
 }  // namespace
 
 // uv = S · R(θ) · (x, y) is affine in position, so ∂p/∂u is the same everywhere: the first column
-// of (S R)⁻¹, and B = w · N × T must point along ∂p/∂v.
+// of (S R)⁻¹. glTF's v runs down the image and a normal map's +Y up it, so B = w · N × T must point
+// along −∂p/∂v: w = −1 where the uv map preserves orientation in glTF's (u, v), +1 where mirrored.
 TEST(MikkTangents, PlanarGridWithRotatedScaledUvsGivesTheAnalyticTangent) {
     for (bool mirrored : {false, true}) {
         const float theta = 0.7f, su = mirrored ? -2.f : 2.f, sv = 0.5f;
@@ -56,9 +57,9 @@ TEST(MikkTangents, PlanarGridWithRotatedScaledUvsGivesTheAnalyticTangent) {
             EXPECT_NEAR(t.x, dpdu.x, 1e-5f) << v;
             EXPECT_NEAR(t.y, dpdu.y, 1e-5f) << v;
             EXPECT_NEAR(t.z, 0.f, 1e-6f) << v;
-            EXPECT_EQ(t.w, mirrored ? -1.f : 1.f) << v;
+            EXPECT_EQ(t.w, mirrored ? 1.f : -1.f) << v;
             Vec3f b = t.w * glm::cross(Vec3f(0, 0, 1), Vec3f(t));
-            EXPECT_GT(glm::dot(b, dpdv), 0.999f) << v;
+            EXPECT_GT(glm::dot(b, -dpdv), 0.999f) << v;
         }
     }
 }
@@ -88,10 +89,10 @@ TEST(MikkTangents, MirrorSeamSplitsTheSharedVertices) {
             const Vec4f& tan = m.tangents[t[k]];
             if (centroid.x < 1.f) {
                 EXPECT_NEAR(tan.x, 1.f, 1e-5f);
-                EXPECT_EQ(tan.w, 1.f);
+                EXPECT_EQ(tan.w, -1.f);
             } else {
                 EXPECT_NEAR(tan.x, -1.f, 1e-5f);
-                EXPECT_EQ(tan.w, -1.f);
+                EXPECT_EQ(tan.w, 1.f);
             }
         }
     }

@@ -218,8 +218,8 @@ Film renderLitQuad(Vec3f lightDir, float tilt, float mapTilt, int axis, Image& n
     }
     Vec3f n = glm::normalize(glm::cross(q.positions[3] - q.positions[0], q.positions[2] - q.positions[0]));
     q.normals = std::vector<Vec3f>(4, n);
-    // The file's tangent frame: T = +x, w = +1, so B = N × T = +y (∂p/∂v would be −y here; the
-    // frame is what the normal map is read in, whatever the uv layout).
+    // The tangent frame an exporter writes for this uv layout (v down the image = −y): T = ∂p/∂u =
+    // +x, w = +1, so B = N × T = +y, up the image, where a normal map's +Y (green) points.
     q.tangents = std::vector<Vec4f>(4, Vec4f(1.f, 0.f, 0.f, 1.f));
     scene.geometry.meshes.push_back(q);
     scene.pointLights.push_back(PointLightDesc{centre + 100.f * lightDir, Rgb(1e4f)});
@@ -258,5 +258,52 @@ TEST(NormalMap, ConstantTiltMatchesTheSameTiltInGeometry) {
         EXPECT_NEAR(geometric, expected, 2e-3 * expected) << "axis " << axis;
         EXPECT_NEAR(mapped, geometric, 2e-3 * expected) << "axis " << axis;
         EXPECT_GT(std::abs(plain - expected), 0.05 * expected) << "axis " << axis;
+    }
+}
+
+// End to end: a glTF quad (uv v down the image, no TANGENT) with a one-texel normal-map PNG tilted
+// towards +Y (green) or +X (red): the loader's MikkTSpace tangents must put green up the image
+// (+y here) and red along +u (+x), so that the quad shades like the tilted normal n decoded from
+// the texel's 8-bit codes, ρ/π · I · (n · l) / d².
+TEST(NormalMap, GltfNormalTextureWithGeneratedTangentsFollowsTheImageAxes) {
+    auto dir = test::tempDir("normal-map-gltf");
+    const float alpha = 0.5f, h = 0.25f * std::tan(0.5f * kYfov);
+    for (int axis : {0, 1}) {
+        Vec3f tilt = axis == 0 ? Vec3f(std::sin(alpha), 0.f, std::cos(alpha)) : Vec3f(0.f, std::sin(alpha), std::cos(alpha));
+        std::vector<uint8_t> texel;
+        for (int c = 0; c < 3; ++c) texel.push_back(uint8_t(std::lround(255.0 * (tilt[c] + 1.0) / 2.0)));
+        Vec3f decoded = glm::normalize(Vec3f(texel[0], texel[1], texel[2]) * (2.f / 255.f) - 1.f);
+        Vec3f lightDir = axis == 0 ? glm::normalize(Vec3f(0.8f, 0.f, 1.f)) : glm::normalize(Vec3f(0.f, 0.8f, 1.f));
+        test::GltfBuilder b;
+        nlohmann::json prim = {{"attributes",
+                                {{"POSITION", b.positions({-h, h, -1, h, h, -1, h, -h, -1, -h, -h, -1})},
+                                 {"NORMAL", b.floats({0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1}, 3, "VEC3")},
+                                 {"TEXCOORD_0", b.floats({0, 0, 1, 0, 1, 1, 0, 1}, 2, "VEC2")}}},
+                               {"indices", b.indices({0, 3, 2, 0, 2, 1})},
+                               {"material", 0}};
+        b.doc["meshes"] = {{{"primitives", {prim}}}};
+        b.doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 0.5, 0.5, 1}}, {"metallicFactor", 0}}},
+                               {"normalTexture", {{"index", b.texture(b.image(test::pngBytes(1, 1, 3, texel), true))}}},
+                               {"extensions", {{"KHR_materials_specular", {{"specularFactor", 0}}}}}}};
+        Vec3f light = Vec3f(0.f, 0.f, -1.f) + 100.f * lightDir;
+        b.doc["extensions"] = {{"KHR_lights_punctual", {{"lights", {{{"type", "point"}, {"intensity", 1e4}}}}}}};
+        b.doc["cameras"] = {{{"type", "perspective"}, {"perspective", {{"yfov", kYfov}, {"znear", 0.01}}}}};
+        b.doc["nodes"] = {{{"mesh", 0}},
+                          {{"camera", 0}},
+                          {{"translation", {light.x, light.y, light.z}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}}};
+        b.doc["scenes"] = {{{"nodes", {0, 1, 2}}}};
+        b.doc["scene"] = 0;
+        b.doc["extensionsUsed"] = {"KHR_materials_specular", "KHR_lights_punctual"};
+        std::string path = (dir / ("n" + std::to_string(axis) + ".glb")).string();
+        b.write(path);
+        std::vector<std::string> warnings;
+        Scene scene = loadGltfScene(path, warnings);
+        ASSERT_FALSE(scene.geometry.meshes[0].tangents.empty());
+        RenderOptions options;
+        options.spp = 4;
+        options.seed = 5;
+        double mean = centreMean(test::renderScene(scene, "ptnee", kRes, kRes, options, "bvh").film);
+        double expected = 0.5 / kPi * glm::dot(decoded, lightDir);
+        EXPECT_NEAR(mean, expected, 2e-3 * expected) << "axis " << axis;
     }
 }

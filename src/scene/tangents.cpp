@@ -42,7 +42,13 @@ struct FaceTangent {
 
 FaceTangent faceTangent(const Vec3f p[3], const Vec2f uv[3]) {
     Vec3f e1 = p[1] - p[0], e2 = p[2] - p[0];
+    // glTF's v runs down the image, MikkTSpace's (Blender's, where it is the standard) up, and
+    // normal maps' +Y points up the image: tangents are computed on (u, 1 − v), as exporters write
+    // them (Khronos glTF-Sample-Models issue 174). ∂p/∂u is the same either way; the orientation
+    // flips, so B = w · (N × T) points up the image (along −∂p/∂v in glTF's uv).
     Vec2f d1 = uv[1] - uv[0], d2 = uv[2] - uv[0];
+    d1.y = -d1.y;
+    d2.y = -d2.y;
     float det = d1.x * d2.y - d2.x * d1.y;
     FaceTangent f;
     if (!(det != 0.f) || !std::isfinite(det)) return f;

@@ -9,7 +9,8 @@
 namespace tessera {
 
 /// Fills `mesh.tangents` (xyz unit, w = ±1 bitangent sign with B = w · (N × T)) from positions,
-/// normals and texcoords[uvSet] in the space they are given in (the glTF loader calls it in object
+/// normals and glTF texcoords[uvSet] (v down the image; MikkTSpace runs on (u, 1 − v), so B points
+/// up the image, the +Y of a normal map) in the space they are given in (the glTF loader calls it in object
 /// space, before the node transform, as the file's own tangents would be). Needs normals and
 /// texcoords[uvSet]. Vertices whose corners fall into different MikkTSpace groups (a UV mirror
 /// seam through a shared vertex) are duplicated, so `mesh.triangles` and every per-vertex array
