@@ -235,6 +235,17 @@ class Gltf:
             node["rotation"] = list(rotation)
         return self.add("nodes", node)
 
+    def asset_gltf(self, name, asset, translation, scale, rotation=None):
+        """TESSERA_asset_gltf: a glTF/GLB file that is never committed (e.g. a
+        WebXR controller), named relative to TESSERA_ASSETS / the fetch cache,
+        loaded with its meshes, materials, textures and node hierarchy."""
+        self.use("TESSERA_asset_gltf", required=True)
+        node = {"name": name, "translation": list(translation), "scale": [scale, scale, scale],
+                "extensions": {"TESSERA_asset_gltf": {"asset": asset}}}
+        if rotation is not None:
+            node["rotation"] = list(rotation)
+        return self.add("nodes", node)
+
     def sphere(self, name, centre, radius, material):
         self.use("TESSERA_sphere", required=True)
         return self.add("nodes", {"name": name, "translation": list(centre),
@@ -284,7 +295,7 @@ def validate(name, text, binary):
     assert isinstance(asset["extras"]["description"], str) and "\n" not in asset["extras"]["description"]
     used = set(doc.get("extensionsUsed", []))
     required = set(doc.get("extensionsRequired", []))
-    assert required <= used and required <= {"TESSERA_sphere", "TESSERA_asset_mesh"}, name
+    assert required <= used and required <= {"TESSERA_sphere", "TESSERA_asset_mesh", "TESSERA_asset_gltf"}, name
 
     found = set()
 
@@ -357,6 +368,12 @@ def validate(name, text, binary):
             parts = a["asset"].split("/")
             assert all(p and p not in (".", "..") and
                        all(ch.isalnum() or ch in "._-" for ch in p) for p in parts), a["asset"]
+        ag = node.get("extensions", {}).get("TESSERA_asset_gltf")
+        if ag is not None:
+            assert "mesh" not in node and set(ag) == {"asset"}, ag
+            parts = ag["asset"].split("/")
+            assert ag["asset"].endswith((".glb", ".gltf")) and all(
+                p and p not in (".", "..") and all(ch.isalnum() or ch in "._-" for ch in p) for p in parts), ag["asset"]
         lp = node.get("extensions", {}).get("KHR_lights_punctual")
         if lp is not None:
             assert 0 <= lp["light"] < len(doc["extensions"]["KHR_lights_punctual"]["lights"])

@@ -72,6 +72,8 @@ SCENES = {
     "point-light-specular": ("scenes/point-light-specular/point-light-specular.gltf", "128x96",
                              "bdpt", 128, None, 0),
     "furnace": ("scenes/furnace/furnace.gltf", "64x64", "bdpt", 32, "ptnee", 64),
+    "webxr-controllers": ("scenes/webxr/webxr-controllers.gltf", "128x96", "bdpt", 32, "ptnee", 64),
+    "webxr-lineup": ("scenes/webxr/webxr-lineup.gltf", "160x90", "bdpt", 32, "ptnee", 64),
 }
 
 WHY = {
@@ -95,6 +97,10 @@ WHY = {
     "point-light-specular": "point light: ptnee misses the caustics, lt what the mirror shows; bdpt samples "
                             "all but point light -> specular -> diffuse -> specular -> camera (no method can)",
     "furnace": "analytic: every pixel Le / (1 - a) = (2, 1.4286, 3.3333)",
+    "webxr-controllers": "third-party glTF assets (TESSERA_asset_gltf) under an area light: bdpt and ptnee both "
+                         "sample every path",
+    "webxr-lineup": "third-party glTF assets, two of them emissive, one with a transmissive part: bdpt and ptnee "
+                    "both sample every path (the transmissive part's caustics only through BSDF sampling in ptnee)",
 }
 
 
@@ -238,14 +244,17 @@ def write_readme(db):
         "that has rendered, reads as 0); `tessera compare` reads them.",
         "",
         "Regenerate (slow; niced, 2 threads): `python3 tools/make_refs.py [NAME...]`, after",
-        "`tools/fetch_assets.sh` for the dragons.",
+        "`tools/fetch_assets.sh` for the dragons and the WebXR controllers.",
         "",
         "Agreement: a second, independent integrator rendered the same way (seeds 2000…2007) where it",
         "can sample every path; z = |a − b| / sqrt(σa² + σb²) per pixel channel; mean ratio = its image",
         "mean / the reference's. With K = 8 renders each σ has 7 degrees of freedom, so about 1% of",
         "channels exceed 3σ even when both agree; heavy-tailed estimators (ptnee's BSDF-sampled caustics)",
-        "underestimate their own σ and show more. The dragon scenes read the Stanford dragon that",
-        "`tools/fetch_assets.sh` fetches (SHA-256 checked), found through `TESSERA_ASSETS` or the fetch cache.",
+        "underestimate their own σ and show more. The dragon scenes read the Stanford dragon and the",
+        "webxr scenes the WebXR input-profile GLBs (MIT) that `tools/fetch_assets.sh` fetches (SHA-256",
+        "checked), found through `TESSERA_ASSETS` or the fetch cache; the webxr references show the",
+        "renderer's materials of their date (textures and the full glTF material model make them stale:",
+        "regenerate them when those land).",
         "",
         "| reference | integrator, renders × spp | resolution | render s | mean RGB | median rel. stderr | agreement | why this integrator |",
         "|---|---|---|---|---|---|---|---|",

