@@ -10,6 +10,7 @@
 #include "integrators/integrator.h"
 #include "render/film.h"
 #include "scene/gltf_loader.h"
+#include "scene/tangents.h"
 #include "test_helpers.h"
 
 using namespace tessera;
@@ -305,5 +306,93 @@ TEST(NormalMap, GltfNormalTextureWithGeneratedTangentsFollowsTheImageAxes) {
         double mean = centreMean(test::renderScene(scene, "ptnee", kRes, kRes, options, "bvh").film);
         double expected = 0.5 / kPi * glm::dot(decoded, lightDir);
         EXPECT_NEAR(mean, expected, 2e-3 * expected) << "axis " << axis;
+    }
+}
+
+// Every integrator sees the same textures: in a closed sphere (seen from inside) whose surface has
+// a checkerboard albedo, a random-tilt normal map (MikkTSpace tangents) and uniform emission, pt,
+// lt and bdpt agree with ptnee bin by bin (4×4-pixel bins, 16 independent batches each: z from the
+// batch variances, Šidák-corrected over bins and channels). The MIP level is a function of the hit
+// point (Camera::pixelFootprint), so camera and light sub-paths read the same filtered values.
+TEST(TexturedAgreement, EveryIntegratorAgreesInATexturedNormalMappedFurnace) {
+    Image albedo = imageOf(8, 4, [](int x, int y) { return (x + y) % 2 ? Vec4f(0.85f, 0.5f, 0.3f, 1.f) : Vec4f(0.3f, 0.6f, 0.75f, 1.f); });
+    uint32_t state = 2024u;
+    auto uniform = [&] {
+        state = state * 1664525u + 1013904223u;
+        return float(state >> 8) / float(1u << 24);
+    };
+    Image bumps = imageOf(16, 8, [&](int, int) {
+        Vec3f n = glm::normalize(Vec3f(0.8f * (uniform() - 0.5f), 0.8f * (uniform() - 0.5f), 1.f));
+        return Vec4f(0.5f * (n + 1.f), 1.f);
+    });
+    Scene scene;
+    Material m;
+    m.bsdf.baseColor = Rgb(1.f);
+    m.bsdf.specular = 0.f;
+    m.emission = Rgb(0.5f);
+    m.doubleSided = true;
+    m.textures.baseColor.image = &albedo;
+    m.textures.normal.image = &bumps;
+    scene.materials.push_back(m);
+    Vec3f centre(0.1f, -0.2f, 0.05f);
+    TriangleMesh mesh = test::makeUvSphereMesh(centre, 1.f, 24, 48, 0);
+    for (const Vec3f& p : mesh.positions) {
+        mesh.normals.push_back(glm::normalize(p - centre));
+        Vec3f d = glm::normalize(p - centre);
+        mesh.texcoords[0].emplace_back(std::atan2(d.z, d.x) / (2.f * kPi) + 0.5f, std::acos(std::clamp(d.y, -1.f, 1.f)) / kPi);
+    }
+    // The seam column (phi = 2π) gets u = 1, not 0, so no triangle wraps through the whole texture.
+    for (int r = 0; r <= 24; ++r) mesh.texcoords[0][size_t(r * 49 + 48)].x = mesh.texcoords[0][size_t(r * 49)].x + 1.f;
+    generateMikkTangents(mesh, 0);
+    scene.geometry.meshes.push_back(mesh);
+    scene.finalize();
+    scene.camera = CameraDesc{};
+    scene.camera->yfov = 1.2f;
+
+    const int res = 24, bin = 4, bins = res / bin, batches = 16;
+    auto binMoments = [&](const char* name, int spp) {
+        std::vector<double> sum(size_t(bins * bins * 3), 0.0), sumSq(sum.size(), 0.0);
+        for (int b = 0; b < batches; ++b) {
+            RenderOptions options;
+            options.spp = spp;
+            options.seed = 500 + uint64_t(b);
+            options.threads = 2;
+            Film film = test::renderScene(scene, name, res, res, options, "embree").film;
+            for (int by = 0; by < bins; ++by)
+                for (int bx = 0; bx < bins; ++bx)
+                    for (int c = 0; c < 3; ++c) {
+                        double v = 0.0;
+                        for (int y = 0; y < bin; ++y)
+                            for (int x = 0; x < bin; ++x) v += film.pixel(bx * bin + x, by * bin + y)[c];
+                        v /= bin * bin;
+                        sum[size_t((by * bins + bx) * 3 + c)] += v;
+                        sumSq[size_t((by * bins + bx) * 3 + c)] += v * v;
+                    }
+        }
+        return std::pair{sum, sumSq};
+    };
+    auto [refSum, refSumSq] = binMoments("ptnee", 16);
+    const double n = double(bins * bins * 3);
+    const double alphaPerTest = 1.0 - std::pow(1.0 - 0.01, 1.0 / n);  // Šidák at 0.01
+    for (auto [name, spp] : {std::pair{"pt", 16}, std::pair{"lt", 32}, std::pair{"bdpt", 8}}) {
+        auto [sum, sumSq] = binMoments(name, spp);
+        double minP = 1.0, meanA = 0.0, meanB = 0.0;
+        std::string worst;
+        for (size_t i = 0; i < size_t(n); ++i) {
+            double ma = sum[i] / batches, mb = refSum[i] / batches;
+            double va = std::max(0.0, (sumSq[i] - batches * ma * ma) / (batches - 1));
+            double vb = std::max(0.0, (refSumSq[i] - batches * mb * mb) / (batches - 1));
+            // The variances come from the batches themselves, so (ma − mb)/se is Student-t
+            // distributed, heavier-tailed than normal: map it to a normal deviate with the standard
+            // approximation z = t (1 − 1/(4ν)) / √(1 + t²/(2ν)), ν = batches − 1 (conservative).
+            double t = (ma - mb) / std::sqrt((va + vb) / batches), nu = batches - 1.0;
+            double z = t * (1.0 - 1.0 / (4.0 * nu)) / std::sqrt(1.0 + t * t / (2.0 * nu));
+            double p = std::erfc(std::abs(z) / std::sqrt(2.0));
+            if (p < minP) minP = p, worst = std::to_string(ma) + " vs " + std::to_string(mb) + " (t " + std::to_string(t) + ")";
+            meanA += ma / n;
+            meanB += mb / n;
+        }
+        EXPECT_GT(minP, alphaPerTest) << name << " vs ptnee: worst bin " << worst;
+        EXPECT_NEAR(meanA, meanB, 0.01 * meanB) << name << " vs ptnee";
     }
 }
