@@ -11,7 +11,9 @@
 
 namespace tessera {
 
-enum class MaterialType { Diffuse, Mirror, Dielectric, RoughConductor };
+/// Diffuse, Mirror, Dielectric and RoughConductor are the single-lobe special cases of Pbr, the
+/// glTF 2.0 metallic-roughness material (materials/bsdf.h, finalizeBsdfParams).
+enum class MaterialType { Diffuse, Mirror, Dielectric, RoughConductor, Pbr };
 
 /// The BSDF inputs at one surface point: the material's factors, multiplied by its textures there.
 /// Small and copied by value into SurfaceBsdf.
