@@ -65,6 +65,7 @@ void finalizeBsdfParams(BsdfParams& p) {
     else if (p.metallic == 0.f && p.transmission == 1.f && smooth && !p.thinWalled && p.specular == 1.f && p.specularColor == Rgb(1.f))
         p.type = MaterialType::Dielectric;
     else p.type = MaterialType::Pbr;
+    p.coatFresnelAvg = p.type == MaterialType::Pbr ? pbrCoatFresnelAverage(p) : 0.f;
 }
 
 bool isDeltaMaterial(const BsdfParams& m) {

@@ -29,6 +29,7 @@ struct Pbr {
     bool plainFresnel = true; ///< specular 1, specularColor 1: F_d is the Fresnel reflectance itself
     bool hasDiffuse = false;
     bool hasTransmission = false;
+    float diffuseNorm = 1.f;  ///< 1 / (1 − F_avg) outside; 1 inside a volume (where TIR dominates F_avg)
     float pDiffuse = 0.f;     ///< probability of sampling the diffuse lobe (the rest: microfacet lobes)
 
     Pbr(const BsdfParams& params, const Vec3f& woIn) : p(params) {
@@ -45,6 +46,7 @@ struct Pbr {
         plainFresnel = p.specular == 1.f && p.specularColor == Rgb(1.f);
         hasDiffuse = p.metallic < 1.f && p.transmission < 1.f && maxComponent(p.baseColor) > 0.f;
         hasTransmission = p.metallic < 1.f && p.transmission > 0.f && maxComponent(p.baseColor) > 0.f;
+        if (!(refracts && flip < 0.f) && p.coatFresnelAvg < 1.f) diffuseNorm = 1.f / (1.f - p.coatFresnelAvg);
         pDiffuse = diffuseProbability();
     }
 
@@ -78,7 +80,7 @@ struct Pbr {
     float diffuseProbability() const {
         if (!hasDiffuse) return 0.f;
         Rgb coatF = coatFresnel(wo.z);
-        float wDiffuse = (1.f - p.metallic) * (1.f - p.transmission) * average(p.baseColor) * (1.f - maxComponent(coatF));
+        float wDiffuse = (1.f - p.metallic) * (1.f - p.transmission) * average(p.baseColor) * (1.f - maxComponent(coatF)) * diffuseNorm;
         if (wDiffuse <= 0.f) return 0.f;  // f_diffuse(wo, ·) = 0 at this wo
         float wMicro = average(specularReflectance(wo.z, coatF)) + transmissionWeight(coatF) * average(p.baseColor);
         bool microPresent = p.metallic > 0.f || (p.specular > 0.f && p.ior != 1.f) || hasTransmission;
@@ -89,7 +91,7 @@ struct Pbr {
 
     Rgb diffuseF(const Vec3f& wi) const {
         if (!hasDiffuse || wi.z <= 0.f) return Rgb(0.f);
-        float k = (1.f - p.metallic) * (1.f - p.transmission) * coatTransmittance(wo.z) * coatTransmittance(wi.z);
+        float k = (1.f - p.metallic) * (1.f - p.transmission) * coatTransmittance(wo.z) * coatTransmittance(wi.z) * diffuseNorm;
         return p.baseColor * (k * kInvPi);
     }
 
@@ -147,6 +149,17 @@ struct Pbr {
 
 bool pbrHasNonDeltaLobe(const BsdfParams& m) {
     return m.alpha >= kMinAlpha || (m.metallic < 1.f && m.transmission < 1.f && maxComponent(m.baseColor) > 0.f);
+}
+
+float pbrCoatFresnelAverage(const BsdfParams& m) {
+    // ∫₀¹ F(μ) 2μ dμ = ∫₀¹ F(√u) du by the midpoint rule (F is smooth in u; 64 points: ~1e-5).
+    BsdfParams outside = m;
+    outside.thinWalled = true;  // wo outside: η as given
+    Pbr b(outside, Vec3f(0.f, 0.f, 1.f));
+    constexpr int kN = 64;
+    double sum = 0.0;
+    for (int i = 0; i < kN; ++i) sum += maxComponent(b.coatFresnel(std::sqrt((i + 0.5f) / kN)));
+    return float(sum / kN);
 }
 
 Rgb evalPbr(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) {
