@@ -1,5 +1,7 @@
 #include "materials/gltf_pbr.h"
 
+#include <utility>
+
 #include "core/sampling.h"
 #include "materials/bsdf_local.h"
 
@@ -152,14 +154,23 @@ bool pbrHasNonDeltaLobe(const BsdfParams& m) {
 }
 
 float pbrCoatFresnelAverage(const BsdfParams& m) {
-    // ∫₀¹ F(μ) 2μ dμ = ∫₀¹ F(√u) du by the midpoint rule (F is smooth in u; 64 points: ~1e-5).
+    if (!(m.metallic < 1.f && m.transmission < 1.f)) return 0.f;  // no diffuse base to normalize
+    // ∫₀¹ max F_d(µ) 2µ dµ by 8-point Gauss–Legendre (abscissae and weights of Abramowitz & Stegun,
+    // Table 25.4) on [0, 0.2] and [0.2, 1]: the reflectance rises steeply only near grazing; the
+    // error stays below 1e-5 for ior 1.01 … 10.
+    static constexpr double kX[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363};
+    static constexpr double kW[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
     BsdfParams outside = m;
-    outside.thinWalled = true;  // wo outside: η as given
+    outside.thinWalled = true;  // seen from outside: η as given
     Pbr b(outside, Vec3f(0.f, 0.f, 1.f));
-    constexpr int kN = 64;
     double sum = 0.0;
-    for (int i = 0; i < kN; ++i) sum += maxComponent(b.coatFresnel(std::sqrt((i + 0.5f) / kN)));
-    return float(sum / kN);
+    for (auto [lo, hi] : {std::pair{0.0, 0.2}, std::pair{0.2, 1.0}})
+        for (int i = 0; i < 4; ++i)
+            for (double sign : {-1.0, 1.0}) {
+                double mu = lo + (hi - lo) * 0.5 * (1.0 + sign * kX[i]);
+                sum += (hi - lo) * 0.5 * kW[i] * 2.0 * mu * maxComponent(b.coatFresnel(float(mu)));
+            }
+    return float(sum);
 }
 
 Rgb evalPbr(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) {
