@@ -133,6 +133,12 @@ float pdfBsdfW(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn) {
     return 0.f;
 }
 
+Rgb evalBsdfWithPdf(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal, TransportMode mode, float& pdfW) {
+    if (m.type == MaterialType::Pbr) return evalPdfPbr(m, woLocal, wiLocal, mode, pdfW);
+    pdfW = pdfBsdfW(m, woLocal, wiLocal);
+    return evalBsdf(m, woLocal, wiLocal, mode);
+}
+
 bool sampleBsdf(const BsdfParams& m, const Vec3f& woIn, float uLobe, Vec2f u, TransportMode mode, BsdfSample& out) {
     if (m.type == MaterialType::Pbr) return samplePbr(m, woIn, uLobe, u, mode, out);
     if (woIn.z == 0.f) return false;

@@ -43,6 +43,8 @@ Rgb evalBsdf(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal, Tr
 /// Solid-angle density with which sampleBsdf generates wi given wo through its non-delta lobes (the
 /// lobe-selection probabilities included).
 float pdfBsdfW(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal);
+/// evalBsdf and pdfBsdfW together (one evaluation of the lobes for the glTF model).
+Rgb evalBsdfWithPdf(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal, TransportMode mode, float& pdfW);
 /// Samples wi given wo; `uLobe` picks reflection/refraction, `u` the direction. False when no
 /// direction is produced (e.g. wo grazing).
 bool sampleBsdf(const BsdfParams& m, const Vec3f& woLocal, float uLobe, Vec2f u, TransportMode mode, BsdfSample& out);

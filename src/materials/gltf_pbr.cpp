@@ -173,24 +173,25 @@ float pbrCoatFresnelAverage(const BsdfParams& m) {
     return float(sum);
 }
 
-Rgb evalPbr(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) {
+Rgb evalPdfPbr(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode, float& pdfW) {
+    pdfW = 0.f;
     if (woIn.z == 0.f) return Rgb(0.f);
     Pbr b(m, woIn);
     Vec3f wi = woIn.z < 0.f ? flipZ(wiIn) : wiIn;
     Rgb f;
-    float pdfW;
     b.microfacet(wi, mode, f, pdfW);
+    if (b.hasDiffuse) pdfW += b.pDiffuse * cosineHemispherePdfW(wi.z);
     return f + b.diffuseF(wi);
 }
 
-float pdfPbr(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn) {
-    if (woIn.z == 0.f) return 0.f;
-    Pbr b(m, woIn);
-    Vec3f wi = woIn.z < 0.f ? flipZ(wiIn) : wiIn;
-    Rgb f;
+Rgb evalPbr(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) {
     float pdfW;
-    b.microfacet(wi, TransportMode::Radiance, f, pdfW);
-    if (b.hasDiffuse) pdfW += b.pDiffuse * cosineHemispherePdfW(wi.z);
+    return evalPdfPbr(m, woIn, wiIn, mode, pdfW);
+}
+
+float pdfPbr(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn) {
+    float pdfW;
+    evalPdfPbr(m, woIn, wiIn, TransportMode::Radiance, pdfW);
     return pdfW;
 }
 

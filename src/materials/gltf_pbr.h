@@ -31,6 +31,8 @@ namespace tessera {
 
 Rgb evalPbr(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal, TransportMode mode);
 float pdfPbr(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal);
+/// evalPbr and pdfPbr from one evaluation of the lobes.
+Rgb evalPdfPbr(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal, TransportMode mode, float& pdfW);
 bool samplePbr(const BsdfParams& m, const Vec3f& woLocal, float uLobe, Vec2f u, TransportMode mode, BsdfSample& out);
 /// True when the material has a non-delta lobe (a diffuse base, or α ≥ kMinAlpha).
 bool pbrHasNonDeltaLobe(const BsdfParams& m);

@@ -34,8 +34,7 @@ Rgb SurfaceBsdf::evalWithPdf(const Vec3f& wo, const Vec3f& wi, TransportMode mod
     pdfFwdW = 0.f;
     if (isDelta() || !sidesAgree(wo, wi)) return Rgb(0.f);
     Vec3f woL = frame_.toLocal(wo), wiL = frame_.toLocal(wi);
-    pdfFwdW = pdfBsdfW(mat_, woL, wiL);
-    return evalBsdf(mat_, woL, wiL, mode) * shadingCorrection(wo, wi, mode);
+    return evalBsdfWithPdf(mat_, woL, wiL, mode, pdfFwdW) * shadingCorrection(wo, wi, mode);
 }
 
 bool SurfaceBsdf::sample(const Vec3f& wo, float uLobe, Vec2f u, TransportMode mode, SurfaceBsdfSample& out) const {
