@@ -269,6 +269,36 @@ TEST(GltfBsdf, SpecialCasesAreTheModelsLimits) {
     }
 }
 
+// KHR_materials_specular on a smooth coat: reflectance s·min(F0·specularColor, 1) head-on (F0 from
+// the ior), rising to F90 = s at grazing; what the coat does not reflect (its maximum channel) goes
+// straight through a thin wall, tinted by baseColor.
+TEST(GltfBsdf, KhrSpecularScalesF0AndF90AndThinWallsTransmitTheRest) {
+    const float s = 0.6f, ior = 1.7f;
+    const Rgb tint(1.f, 0.5f, 0.25f), base(0.9f, 0.8f, 0.7f);
+    const float f0 = sqr((ior - 1.f) / (ior + 1.f));
+    BsdfParams p = makeParams({"", base, 0.f, 0.f, 1.f, s, true, ior, tint});
+    ASSERT_EQ(p.type, MaterialType::Pbr);
+    for (float theta : {0.f, 89.9f}) {
+        Vec3f wo = direction(theta, 30.f);
+        Rgb reflected(0.f), transmitted(0.f);
+        for (float uLobe : {0.001f, 0.999f}) {
+            BsdfSample bs;
+            ASSERT_TRUE(sampleBsdf(p, wo, uLobe, Vec2f(0.5f), TransportMode::Radiance, bs));
+            ASSERT_TRUE(bs.isDelta);
+            (bs.wiLocal.z > 0.f ? reflected : transmitted) = bs.weight * bs.pdfW;  // the lobe's value
+        }
+        // The exact Fresnel curve's shape w between F0 (w = 0, head-on) and 1 (w → 1 at grazing).
+        float w = (fresnelDielectric(wo.z, ior) - f0) / (1.f - f0);
+        Rgb f0c = glm::min(Rgb(f0) * tint, Rgb(1.f));
+        Rgb expectR = s * (f0c + (Rgb(1.f) - f0c) * w);
+        if (theta == 0.f) EXPECT_NEAR(w, 0.f, 1e-6f);
+        else EXPECT_GT(w, 0.98f);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(reflected[c], expectR[c], 1e-5f) << "theta " << theta;
+        Rgb expectT = base * (1.f - maxComponent(reflected));
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(transmitted[c], expectT[c], 1e-4f) << "theta " << theta;
+    }
+}
+
 TEST(GltfBsdf, TypeMappingAndDeltaFlags) {
     EXPECT_EQ(makeParams({"", Rgb(0.8f), 0.f, 1.f}).type, MaterialType::Pbr);  // plain baseColor: 4% coat
     EXPECT_EQ(makeParams({"", Rgb(0.8f), 1.f, 0.5f}).type, MaterialType::RoughConductor);
