@@ -298,6 +298,8 @@ private:
         Material def;
         def.name = "default";
         def.bsdf.baseColor = Rgb(0.8f);
+        def.bsdf.specular = 0.f;  // Lambertian: no dielectric coat (KHR_materials_specular's specularFactor 0)
+        finalizeBsdfParams(def.bsdf);
         scene_.materials.push_back(def);
         alphaMasks_.push_back(nullptr);
     }
