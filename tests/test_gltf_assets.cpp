@@ -412,7 +412,12 @@ TEST_P(WebxrSurvey, EveryModelLoadsAndRendersAndItsWarningsAreListed) {
             }
             if (s.lights().size() > 0) {
                 ++emissive;
-                EXPECT_GT(sum, 2 * 16.0 * 12.0) << name << ": emissive, yet black (alpha alone sums to 384)";
+                // Emission modulated by an emissive texture may be black nearly everywhere (the LED
+                // spots of magicleap-two and samsung-odyssey cover a few texels of 2048²): only
+                // untextured emitters must light the two small views.
+                bool untexturedEmitter = false;
+                for (const Material& m : s.materials) untexturedEmitter |= m.isEmissive() && !m.textures.emissive.valid();
+                if (untexturedEmitter) EXPECT_GT(sum, 2 * 16.0 * 12.0) << name << ": emissive, yet black (alpha alone sums to 384)";
             }
         } catch (const std::exception& e) {
             ADD_FAILURE() << name << ": " << e.what();

@@ -155,7 +155,12 @@ class Gltf:
         return len(lst) - 1
 
     def material(self, name, base=(0.0, 0.0, 0.0), metallic=0.0, roughness=1.0,
-                 emission=None, transmission=None, ior=None, double_sided=False):
+                 emission=None, transmission=None, ior=None, double_sided=False,
+                 specular=None, thickness=None):
+        """A glTF metallic-roughness material. `specular` writes KHR_materials_specular's
+        specularFactor (0: a pure Lambertian, no dielectric coat); `thickness` writes
+        KHR_materials_volume's thicknessFactor (> 0: the mesh bounds a refracting volume,
+        else a transmissive surface is thin-walled)."""
         m = {
             "name": name,
             "pbrMetallicRoughness": {
@@ -178,6 +183,12 @@ class Gltf:
         if ior is not None:
             m.setdefault("extensions", {})["KHR_materials_ior"] = {"ior": ior}
             self.use("KHR_materials_ior")
+        if specular is not None:
+            m.setdefault("extensions", {})["KHR_materials_specular"] = {"specularFactor": specular}
+            self.use("KHR_materials_specular")
+        if thickness is not None:
+            m.setdefault("extensions", {})["KHR_materials_volume"] = {"thicknessFactor": thickness}
+            self.use("KHR_materials_volume")
         return self.add("materials", m)
 
     def _view(self, data, target):

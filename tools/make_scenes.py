@@ -22,8 +22,11 @@ one-line description):
 
 Conventions (what Tessera's loader reads):
   * Materials: pbrMetallicRoughness with metallicFactor written explicitly
-    (glTF's default of 1 would mean metal). metallic 0 / roughness 1 is
-    Lambertian with albedo = baseColorFactor.
+    (glTF's default of 1 would mean metal). A glTF dielectric has a 4%
+    specular coat, so a material meant as a pure Lambertian (albedo =
+    baseColorFactor) says so with KHR_materials_specular specularFactor 0;
+    glass meant as a solid refracting body has KHR_materials_volume with
+    thicknessFactor > 0 (without it, transmission is thin-walled).
   * Emitters: black base colour, emissiveFactor (max component 1) times
     KHR_materials_emissive_strength.emissiveStrength = radiance. Emission is
     one-sided: the front face is the counter-clockwise side, i.e. the face
@@ -113,12 +116,13 @@ def cornell_box(variant=None, light_area_divisor=1):
     else:
         description = descriptions[(variant, 1)]
     g = Gltf(description)
-    white = g.material("white", base=(0.725, 0.71, 0.68))
-    red = g.material("red", base=(0.63, 0.065, 0.05))
-    green = g.material("green", base=(0.14, 0.45, 0.091))
+    white = g.material("white", base=(0.725, 0.71, 0.68), specular=0.0)
+    red = g.material("red", base=(0.63, 0.065, 0.05), specular=0.0)
+    green = g.material("green", base=(0.14, 0.45, 0.091), specular=0.0)
     # Radiance (17, 12, 4) = emissiveFactor (1, 12/17, 4/17) x strength 17.
     light = g.material("light", base=(0.0, 0.0, 0.0),
-                       emission=((1.0, 12.0 / 17.0, 4.0 / 17.0), 17.0 * light_area_divisor))
+                       emission=((1.0, 12.0 / 17.0, 4.0 / 17.0), 17.0 * light_area_divisor),
+                       specular=0.0)
 
     light_quad = CB_LIGHT
     if light_area_divisor != 1:
@@ -150,7 +154,7 @@ def cornell_box(variant=None, light_area_divisor=1):
         g.use("TESSERA_sphere", required=True)
         mirror = g.material("mirror", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
         glass = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
-                           transmission=1.0, ior=1.5)
+                           transmission=1.0, ior=1.5, thickness=0.2)
         # Resting on the floor (y = 0): centre height = radius (metres).
         for name, centre, radius, mat in (("mirror sphere", (0.37, 0.1, 0.37), 0.1, mirror),
                                           ("glass sphere", (0.18, 0.1, 0.2), 0.1, glass)):
@@ -176,17 +180,18 @@ def sphere_cornell(variant):
     }
     g = Gltf(descriptions[variant])
     g.use("TESSERA_sphere", required=True)
-    green = g.material("green", base=(0.0, 0.8, 0.0))
-    red = g.material("red", base=(0.8, 0.0, 0.0))
-    grey = g.material("grey", base=(0.8, 0.8, 0.8))
-    white = g.material("white", base=(0.9, 0.9, 0.9))
-    light = g.material("light", base=(0.0, 0.0, 0.0), emission=((1.0, 1.0, 0.75), 12.0))
+    green = g.material("green", base=(0.0, 0.8, 0.0), specular=0.0)
+    red = g.material("red", base=(0.8, 0.0, 0.0), specular=0.0)
+    grey = g.material("grey", base=(0.8, 0.8, 0.8), specular=0.0)
+    white = g.material("white", base=(0.9, 0.9, 0.9), specular=0.0)
+    light = g.material("light", base=(0.0, 0.0, 0.0), emission=((1.0, 1.0, 0.75), 12.0),
+                       specular=0.0)
     left_mat, right_mat = white, white
     if variant == "mirror":
         left_mat = g.material("mirror", base=(0.999, 0.999, 0.999), metallic=1.0, roughness=0.0)
     elif variant == "glass":
         right_mat = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
-                               transmission=1.0, ior=1.5)
+                               transmission=1.0, ior=1.5, thickness=33.0)
 
     # (name, centre literal, centre formula, radius, material). Centres are
     # written as decimal literals so the JSON is exact-looking; each is checked
@@ -278,9 +283,9 @@ def ring_caustic():
     g = Gltf("A mirror ring (r 0.95-1.0, height 0.3) on a diffuse plane under a small, low sphere "
              "light: the cardioid caustic of the coffee cup, reachable only via light tracing or "
              "by hitting the light through the mirror.")
-    plane = g.material("plane", base=(0.8, 0.8, 0.8))
+    plane = g.material("plane", base=(0.8, 0.8, 0.8), specular=0.0)
     metal = g.material("ring", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
-    light = g.material("light", emission=((1.0, 0.95, 0.85), 3000.0))
+    light = g.material("light", emission=((1.0, 0.95, 0.85), 3000.0), specular=0.0)
     g.quads("plane", [floor_quad(4.0)[0]], lambda q: (0.0, 1.0, 0.0), plane)
     pos, tris = ring_mesh()
     g.add("nodes", {"name": "ring", "mesh": g.mesh("ring", pos, tris, metal)})
@@ -307,14 +312,14 @@ def dragon(glass):
     else:
         g = Gltf("The Stanford dragon (871,414 triangles, fetched, not committed), diffuse, on a "
                  "floor in front of a wall under a rectangular area light.")
-    floor = g.material("floor", base=(0.75, 0.75, 0.75))
-    wall = g.material("wall", base=(0.6, 0.55, 0.5))
+    floor = g.material("floor", base=(0.75, 0.75, 0.75), specular=0.0)
+    wall = g.material("wall", base=(0.6, 0.55, 0.5), specular=0.0)
     if glass:
         body = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
-                          transmission=1.0, ior=1.5)
+                          transmission=1.0, ior=1.5, thickness=0.09)
     else:
-        body = g.material("dragon", base=(0.7, 0.55, 0.35))
-    light = g.material("light", emission=((1.0, 0.9, 0.75), 12.0))
+        body = g.material("dragon", base=(0.7, 0.55, 0.35), specular=0.0)
+    light = g.material("light", emission=((1.0, 0.9, 0.75), 12.0), specular=0.0)
     g.quads("floor", [floor_quad(3.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
     g.quads("wall", [[(-3.0, 0.0, -1.2), (3.0, 0.0, -1.2), (3.0, 3.0, -1.2), (-3.0, 3.0, -1.2)]],
             lambda q: (0.0, 0.0, 1.0), wall)
@@ -339,7 +344,8 @@ def veach_mis():
     lights = [(-3.75, 0.9), (-1.25, 0.3), (1.25, 0.1), (3.75, 0.03)]  # (x, radius)
     # Equal power: radiance x area constant, radiance 1 at radius 0.9 -> (0.9 / r)^2.
     for i, (x, r) in enumerate(lights):
-        mat = g.material("light %d" % i, emission=((1.0, 1.0, 1.0), round((0.9 / r) ** 2, 6)))
+        mat = g.material("light %d" % i, emission=((1.0, 1.0, 1.0), round((0.9 / r) ** 2, 6)),
+                         specular=0.0)
         g.sphere("light %d" % i, (x, 0.0, 0.0), r, mat)
     # Plates: GGX alpha = roughness^2 = 0.1, 0.05, 0.02, 0.005 from the back (top of the image) to
     # the front; each centred on its own view ray (depression angle below the horizon) so the four
@@ -357,7 +363,7 @@ def veach_mis():
         q = [add(c, add(scale((1.0, 0.0, 0.0), sx * half_w), scale(t, sy * half_d)))
              for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
         g.quads("plate %d" % i, [q], lambda qq, n=n: n, mat)
-    wall = g.material("wall", base=(0.4, 0.4, 0.4))
+    wall = g.material("wall", base=(0.4, 0.4, 0.4), specular=0.0)
     g.quads("wall", [[(-10.0, -4.2, -2.0), (10.0, -4.2, -2.0), (10.0, 10.0, -2.0), (-10.0, 10.0, -2.0)]],
             lambda q: (0.0, 0.0, 1.0), wall)
     g.quads("floor", [[(-10.0, -4.2, -2.0), (10.0, -4.2, -2.0), (10.0, -4.2, 16.0), (-10.0, -4.2, 16.0)]],
@@ -371,9 +377,9 @@ def veach_mis():
 def door_ajar():
     g = Gltf("Two rooms joined by a door opened 12 degrees: the only light is in the far room, so "
              "all light seen reaches the camera through the gap (Veach's door scene).")
-    white = g.material("white", base=(0.7, 0.7, 0.7))
-    door_mat = g.material("door", base=(0.55, 0.4, 0.3))
-    light = g.material("light", emission=((1.0, 0.92, 0.8), 200.0))
+    white = g.material("white", base=(0.7, 0.7, 0.7), specular=0.0)
+    door_mat = g.material("door", base=(0.55, 0.4, 0.3), specular=0.0)
+    light = g.material("light", emission=((1.0, 0.92, 0.8), 200.0), specular=0.0)
     X0, X1, H, Z1 = -3.0, 4.0, 2.5, 4.0      # room B: x < 0, room A (camera): x > 0
     DZ0, DZ1, DH = 1.5, 2.4, 2.0             # door opening in the x = 0 wall
     room = box_quads((X0, 0.0, 0.0), (X1, H, Z1))
@@ -409,11 +415,11 @@ def door_ajar():
 def sds_caustic():
     g = Gltf("A glass sphere focuses a small sphere light onto a diffuse floor that the camera sees "
              "only in a 45-degree mirror: the caustic is an SDS path (light, glass, floor, mirror).")
-    floor = g.material("floor", base=(0.8, 0.8, 0.8))
+    floor = g.material("floor", base=(0.8, 0.8, 0.8), specular=0.0)
     glass = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
-                       transmission=1.0, ior=1.5)
+                       transmission=1.0, ior=1.5, thickness=1.0)
     mirror = g.material("mirror", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
-    light = g.material("light", emission=((1.0, 0.95, 0.85), 900.0))
+    light = g.material("light", emission=((1.0, 0.95, 0.85), 900.0), specular=0.0)
     g.quads("floor", [floor_quad(4.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
     g.sphere("glass sphere", (0.0, 0.9, 0.0), 0.5, glass)
     # The light sits behind the mirror's plane (z < y - 4) and below its lower edge (y 2.44), so it
@@ -438,11 +444,11 @@ def sds_caustic():
 def point_light_specular():
     g = Gltf("A point light above a mirror sphere and a glass sphere on a diffuse floor: caustics "
              "that only light tracing (lt, bdpt t=1) can reach; pt sees black, ptnee misses them.")
-    floor = g.material("floor", base=(0.8, 0.8, 0.8))
-    wall = g.material("wall", base=(0.6, 0.6, 0.65))
+    floor = g.material("floor", base=(0.8, 0.8, 0.8), specular=0.0)
+    wall = g.material("wall", base=(0.6, 0.6, 0.65), specular=0.0)
     mirror = g.material("mirror", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
     glass = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
-                       transmission=1.0, ior=1.5)
+                       transmission=1.0, ior=1.5, thickness=1.0)
     g.quads("floor", [floor_quad(3.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
     g.quads("back wall", [[(-3.0, 0.0, -2.0), (3.0, 0.0, -2.0), (3.0, 3.0, -2.0), (-3.0, 3.0, -2.0)]],
             lambda q: (0.0, 0.0, 1.0), wall)
@@ -460,7 +466,7 @@ def furnace():
     g = Gltf("White furnace: the camera inside a closed, emitting, diffuse sphere (albedo a = "
              "(0.5, 0.3, 0.7), Le = 1, both sides): every pixel is Le / (1 - a) = (2, 1.4286, 3.3333).")
     m = g.material("furnace", base=(0.5, 0.3, 0.7), emission=((1.0, 1.0, 1.0), 1.0),
-                   double_sided=True)
+                   double_sided=True, specular=0.0)
     g.sphere("furnace", (0.1, -0.2, 0.05), 1.0, m)
     g.camera("camera", yfov=1.2, aspect=1.0, znear=0.01)
     g.render((64, 64), 16, -1, 0, "ptnee")
@@ -644,6 +650,12 @@ def readme(entries):
         "",
         "Emitters use `emissiveFactor` x `KHR_materials_emissive_strength`; emission is",
         "one-sided (counter-clockwise front face) unless the material is `doubleSided`.",
+        "",
+        "Materials follow the glTF 2.0 metallic-roughness model (writeup.md, \"Material model\").",
+        "Those meant as pure Lambertians (walls, floors, emitters, the furnace) carry",
+        "`KHR_materials_specular` with `specularFactor` 0, which removes the dielectric's 4%",
+        "specular coat; glass bodies carry `KHR_materials_volume` with `thicknessFactor` > 0, so",
+        "they refract as closed volumes instead of thin walls.",
         "",
     ]
     return "\n".join(lines)

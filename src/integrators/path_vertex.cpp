@@ -112,7 +112,7 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
             v.ng = si.ng;
             v.ns = si.ns;
             v.woWorld = -glm::normalize(ray.d);
-            v.bsdf = scene.bsdfParams(si);
+            v.bsdf = scene.bsdfParams(si, ctx.camera.pixelFootprint(si.p));
             v.lightIndex = si.lightIndex;
             v.bary = si.bary;
         } else {

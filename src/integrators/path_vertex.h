@@ -44,9 +44,13 @@ struct PathVertex {
     }
     /// The normal used to offset shadow-ray ends (zero: no surface to leave, e.g. the lens, a point light).
     Vec3f offsetNormal() const { return type == VertexType::Camera ? Vec3f(0.f) : ng; }
-    /// True when this vertex can end a connection edge (Veach's "connectible"). A vertex at infinity
-    /// is only ever reached by its own sub-path's direction (s = 0) or resampled (s = 1).
-    bool connectible() const { return !delta && !atInfinity; }
+    /// True when this vertex can end a connection edge (Veach's "connectible"): its BSDF has a
+    /// non-delta lobe, even where its own walk sampled a delta one (a smooth coat over a diffuse base).
+    /// A vertex at infinity is only ever reached by its own sub-path's direction (s = 0) or
+    /// resampled (s = 1).
+    bool connectible() const {
+        return !atInfinity && (!delta || (type == VertexType::Surface && !isDeltaMaterial(bsdf)));
+    }
 };
 
 /// Unit direction from vertex `a` towards vertex `b`, exact for vertices at infinity; zero when they coincide.

@@ -53,9 +53,8 @@ void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, cons
         trace->add("lightPdfW", ls.pdfW);
         if (!ls.isDelta) trace->add("lightBsdfPdfW", bsdf.pdfFwdW(wo, wi));
     }
-    // Reflection-only BSDFs: wi must leave on wo's side of the *geometric* surface, or a shading
-    // normal would let light through (Veach 1997, §5.3).
-    if (!(glm::dot(wi, si.ng) * glm::dot(wo, si.ng) > 0.f)) return;
+    // Which side of the geometric surface wi may leave on (reflection or transmission) is the BSDF's
+    // side rule, inside evalWithPdf (Veach 1997, §5.3).
     float bsdfPdfW;
     Rgb f = bsdf.evalWithPdf(wo, wi, TransportMode::Radiance, bsdfPdfW) * std::abs(glm::dot(wi, bsdf.ns()));
     if (isBlack(f) || !lightVisible(ctx.accel, si.p, si.ng, ls)) return;
@@ -124,7 +123,7 @@ Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampl
         if (si.lightIndex != kInvalidId) addEmission(ctx, si, wo, beta, deltaBounce, prevPdfW, prevP, L);
         if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;
 
-        SurfaceBsdf bsdf(scene.bsdfParams(si), si.ns, si.ng);
+        SurfaceBsdf bsdf(scene.bsdfParams(si, ctx.camera.pixelFootprint(si.p)), si.ns, si.ng);
         if (!bsdf.isDelta()) addLightSample(ctx, si, bsdf, wo, beta, sampler, L);
 
         // Continue the path by BSDF sampling.
