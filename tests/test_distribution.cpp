@@ -68,6 +68,8 @@ TEST(Distribution2D, ContinuousDensityIntegratesToOneAndMatchesSamples) {
     for (int c = 0; c < nu * nv; ++c) {
         double p = d.pdf((float(c % nu) + 0.5f) / nu, (float(c / nu) + 0.5f) / nv) / double(nu * nv);
         EXPECT_NEAR(counts[size_t(c)] / double(n), p, 5.0 * std::sqrt(p * (1 - p) / n) + 1e-9) << "cell " << c;
-        if (w[size_t(c)] == 0.f) EXPECT_EQ(counts[size_t(c)], 0) << "cell " << c;
+        if (w[size_t(c)] == 0.f) {
+            EXPECT_EQ(counts[size_t(c)], 0) << "cell " << c;
+        }
     }
 }

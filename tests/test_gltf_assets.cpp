@@ -417,7 +417,9 @@ TEST_P(WebxrSurvey, EveryModelLoadsAndRendersAndItsWarningsAreListed) {
                 // untextured emitters must light the two small views.
                 bool untexturedEmitter = false;
                 for (const Material& m : s.materials) untexturedEmitter |= m.isEmissive() && !m.textures.emissive.valid();
-                if (untexturedEmitter) EXPECT_GT(sum, 2 * 16.0 * 12.0) << name << ": emissive, yet black (alpha alone sums to 384)";
+                if (untexturedEmitter) {
+                    EXPECT_GT(sum, 2 * 16.0 * 12.0) << name << ": emissive, yet black (alpha alone sums to 384)";
+                }
             }
         } catch (const std::exception& e) {
             ADD_FAILURE() << name << ": " << e.what();
