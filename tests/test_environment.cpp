@@ -60,18 +60,6 @@ Film render(const Scene& scene, const std::string& integrator, int w, int h, int
     return std::move(r.film);
 }
 
-/// Image mean within 3 standard errors and `relTol` of `expected` in every channel.
-void expectMean(const Film& film, Rgb expected, double relTol, const std::string& what) {
-    double mean[3], se[3];
-    test::pixelMean(film, mean, se);
-    for (int c = 0; c < 3; ++c) {
-        double err = std::abs(mean[c] - expected[c]);
-        EXPECT_LE(err, 3.0 * se[c] + 1e-5 * expected[c]) << what << " channel " << c << ": mean " << mean[c] << " expected "
-                                                          << expected[c] << " se " << se[c];
-        EXPECT_LE(err, relTol * expected[c]) << what << " channel " << c << ": mean " << mean[c] << " expected " << expected[c] << " se " << se[c];
-    }
-}
-
 int sppFor(const std::string& name) { return name == "lt" ? 8192 : name == "bdpt" ? 64 : 128; }
 
 }  // namespace
@@ -93,13 +81,13 @@ TEST(EnvironmentFurnace, ConvexLambertianObjectUnderAConstantEnvironment) {
             // varying weight: 0.5% would take 16× its 2 M paths, so it is held to 1% (and 3 SE).
             bool lt = std::string(name) == "lt";
             Film film = render(scene, name, lt ? 16 : 24, lt ? 16 : 24, sppFor(name), 11);
-            expectMean(film, albedo * L, lt ? 0.01 : 0.005, std::string(name) + (asMesh ? " mesh" : " sphere") + " object");
+            test::expectImageMean(film, albedo * L, lt ? 0.01 : 0.005, std::string(name) + (asMesh ? " mesh" : " sphere") + " object");
         }
         // Looking away from it: only the environment.
         scene.camera = lookAtCamera(Vec3f(0.f, 0.f, 3.f), Vec3f(0.f, 0.5f, 6.f), 0.8f);
         for (const char* name : kIntegrators) {
             Film film = render(scene, name, 16, 16, 4, 12);
-            expectMean(film, L, 1e-5, std::string(name) + " background");
+            test::expectImageMean(film, L, 1e-5, std::string(name) + " background");
         }
     }
 }
@@ -144,7 +132,7 @@ TEST(EnvironmentFurnace, DiffusePlaneUnderAnHdriOfKnownIntegral) {
     for (const char* name : kIntegrators) {
         bool lt = std::string(name) == "lt";
         Film film = render(scene, name, 16, 16, lt ? 4096 : name == std::string("bdpt") ? 64 : 256, 21);
-        expectMean(film, albedo * mean, lt ? 0.01 : 0.005, name);
+        test::expectImageMean(film, albedo * mean, lt ? 0.01 : 0.005, name);
     }
 }
 

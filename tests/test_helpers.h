@@ -1,6 +1,9 @@
 #pragma once
 // Small helpers shared by the tests: procedural scenes and paths to the project's files.
+#include <gtest/gtest.h>
+
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <unistd.h>
@@ -11,6 +14,7 @@
 #include "render/renderer.h"
 #include "scene/assets.h"
 #include "scene/scene.h"
+#include "texture/image.h"
 
 namespace tessera::test {
 
@@ -82,6 +86,33 @@ inline void pixelMean(const Film& film, double mean[3], double se[3]) {
         mean[c] = sum / n;
         se[c] = std::sqrt(std::max(0.0, (sumSq / n - mean[c] * mean[c]) / (n - 1)));
     }
+}
+
+/// The image mean is `expected` within 3 standard errors (plus 1e-5 relative, for noiseless images)
+/// and within `relTol` relative, in every channel.
+inline void expectImageMean(const Film& film, Rgb expected, double relTol, const std::string& what) {
+    double mean[3], se[3];
+    pixelMean(film, mean, se);
+    for (int c = 0; c < 3; ++c) {
+        double err = std::abs(mean[c] - expected[c]);
+        EXPECT_LE(err, 3.0 * se[c] + 1e-5 * expected[c])
+            << what << " channel " << c << ": mean " << mean[c] << " expected " << expected[c] << " se " << se[c];
+        EXPECT_LE(err, relTol * expected[c])
+            << what << " channel " << c << ": mean " << mean[c] << " expected " << expected[c] << " se " << se[c];
+    }
+}
+
+/// A one-level image (with its MIP pyramid) whose texel (x, y) is `texel(x, y)`; row 0 is the top.
+inline Image imageFromTexels(int width, int height, const std::function<Vec4f(int, int)>& texel) {
+    Image img;
+    img.name = "test";
+    img.levels.resize(1);
+    img.levels[0].width = width;
+    img.levels[0].height = height;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) img.levels[0].texels.push_back(texel(x, y));
+    buildMipLevels(img);
+    return img;
 }
 
 /// A closed sphere (radius R = 1) seen from inside, camera at the origin looking down −z.

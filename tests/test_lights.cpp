@@ -52,18 +52,6 @@ Film render(const Scene& scene, const std::string& integrator, int w, int h, int
     return std::move(r.film);
 }
 
-void expectMean(const Film& film, Rgb expected, double relTol, const std::string& what) {
-    double mean[3], se[3];
-    test::pixelMean(film, mean, se);
-    for (int c = 0; c < 3; ++c) {
-        double err = std::abs(mean[c] - expected[c]);
-        EXPECT_LE(err, 3.0 * se[c] + 1e-5 * expected[c]) << what << " channel " << c << ": mean " << mean[c] << " expected "
-                                                          << expected[c] << " se " << se[c];
-        EXPECT_LE(err, relTol * expected[c]) << what << " channel " << c << ": mean " << mean[c] << " expected " << expected[c]
-                                             << " se " << se[c];
-    }
-}
-
 }  // namespace
 
 // A directional light of irradiance E at angle θ from the normal of a Lambertian plane of albedo a:
@@ -84,7 +72,7 @@ TEST(DirectionalLight, DiffusePlaneReflectsAlbedoTimesIrradianceCosineOverPi) {
             EXPECT_EQ(mean[0] + mean[1] + mean[2], 0.0) << "pt cannot find a delta light";
             continue;
         }
-        expectMean(film, expected, lt ? 0.01 : 0.005, name);
+        test::expectImageMean(film, expected, lt ? 0.01 : 0.005, name);
     }
 }
 
@@ -126,7 +114,7 @@ TEST(SpotLight, DiffusePlaneMatchesTheAnalyticFalloffIntegral) {
     for (const char* name : {"ptnee", "lt", "bdpt"}) {
         bool lt = std::string(name) == "lt";
         Film film = render(scene, name, w, h, lt ? 256 : 16, 4);
-        expectMean(film, expected, lt ? 0.01 : 0.005, name);
+        test::expectImageMean(film, expected, lt ? 0.01 : 0.005, name);
     }
 }
 

@@ -31,19 +31,6 @@ std::vector<uint8_t> encodeImage(const std::filesystem::path& path, int width, i
     return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-/// An in-memory image of one level (plus its pyramid) from a texel function.
-Image makeImage(int width, int height, const std::function<Vec4f(int, int)>& texel) {
-    Image img;
-    img.name = "test";
-    img.levels.resize(1);
-    img.levels[0].width = width;
-    img.levels[0].height = height;
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) img.levels[0].texels.push_back(texel(x, y));
-    buildMipLevels(img);
-    return img;
-}
-
 TextureRef textureOf(const Image& img, WrapMode wrap = WrapMode::Repeat, FilterMode filter = FilterMode::Linear) {
     TextureRef t;
     t.image = &img;
@@ -150,7 +137,7 @@ TEST(ImageDecode, RefusesCorruptTruncatedAndOversizedImagesNamingThem) {
 }
 
 TEST(Mip, PyramidOfOddSizesConservesTheMean) {
-    Image img = makeImage(5, 3, [](int x, int y) { return Vec4f(float(x * 7 + y * 3 % 5), float(y), 1.f, 0.5f); });
+    Image img = test::imageFromTexels(5, 3, [](int x, int y) { return Vec4f(float(x * 7 + y * 3 % 5), float(y), 1.f, 0.5f); });
     double mean0 = 0.0;
     for (const Vec4f& t : img.levels[0].texels) mean0 += t.r;
     mean0 /= double(img.levels[0].texels.size());
@@ -162,7 +149,7 @@ TEST(Mip, PyramidOfOddSizesConservesTheMean) {
 }
 
 TEST(SampleTexture, TexelCentresReturnTexelsExactlyInBothFilters) {
-    Image img = makeImage(8, 4, [](int x, int y) { return Vec4f(float(x), float(y), float((x + y) % 2), 1.f); });
+    Image img = test::imageFromTexels(8, 4, [](int x, int y) { return Vec4f(float(x), float(y), float((x + y) % 2), 1.f); });
     for (FilterMode f : {FilterMode::Nearest, FilterMode::Linear}) {
         TextureRef tex = textureOf(img, WrapMode::Repeat, f);
         for (int y = 0; y < 4; ++y)
@@ -180,7 +167,7 @@ TEST(SampleTexture, TexelCentresReturnTexelsExactlyInBothFilters) {
 }
 
 TEST(SampleTexture, WrapModes) {
-    Image img = makeImage(4, 1, [](int x, int) { return Vec4f(float(x), 0.f, 0.f, 1.f); });
+    Image img = test::imageFromTexels(4, 1, [](int x, int) { return Vec4f(float(x), 0.f, 0.f, 1.f); });
     auto at = [&](WrapMode m, float u) { return sampleTexture(textureOf(img, m, FilterMode::Nearest), Vec2f(u, 0.5f), 0.f).r; };
     // Repeat: period 1.
     EXPECT_EQ(at(WrapMode::Repeat, 1.125f), 0.f);
@@ -205,7 +192,7 @@ TEST(SampleTexture, WrapModes) {
 
 TEST(SampleTexture, FootprintSelectsAndBlendsMipLevels) {
     // 1-texel checkerboard: level 0 alternates 0/1; every coarser level is 0.5.
-    Image img = makeImage(64, 64, [](int x, int y) { return Vec4f(float((x + y) % 2), 0.f, 0.f, 1.f); });
+    Image img = test::imageFromTexels(64, 64, [](int x, int y) { return Vec4f(float((x + y) % 2), 0.f, 0.f, 1.f); });
     TextureRef tex = textureOf(img);
     Vec2f uv(0.5f / 64.f, 0.5f / 64.f);  // the centre of texel (0, 0) = 0
     EXPECT_EQ(sampleTexture(tex, uv, 0.f).r, 0.f);
@@ -240,7 +227,7 @@ TEST(SampleTexture, KhrTextureTransformFollowsTheExtensionsExample) {
     flip.scale = Vec2f(1.f, -1.f);
     EXPECT_TRUE(near(flip.apply(Vec2f(0.25f, 0.f)), Vec2f(0.25f, 1.f)));
     // sampleTexture applies it before wrapping.
-    Image img = makeImage(2, 2, [](int x, int y) { return Vec4f(float(x + 2 * y), 0.f, 0.f, 1.f); });
+    Image img = test::imageFromTexels(2, 2, [](int x, int y) { return Vec4f(float(x + 2 * y), 0.f, 0.f, 1.f); });
     TextureRef tex = textureOf(img, WrapMode::Repeat, FilterMode::Nearest);
     tex.transform = flip;
     EXPECT_EQ(sampleTexture(tex, Vec2f(0.25f, 0.25f), 0.f).r, 2.f);  // v 0.25 → 0.75: the bottom row

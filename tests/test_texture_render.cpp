@@ -20,18 +20,6 @@ namespace {
 constexpr float kYfov = 0.8f;
 constexpr int kRes = 64;
 
-Image imageOf(int width, int height, const std::function<Vec4f(int, int)>& texel) {
-    Image img;
-    img.name = "test";
-    img.levels.resize(1);
-    img.levels[0].width = width;
-    img.levels[0].height = height;
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) img.levels[0].texels.push_back(texel(x, y));
-    buildMipLevels(img);
-    return img;
-}
-
 /// A square quad at z = −`dist` facing the camera at the origin (looking down −z), exactly filling
 /// the square image; uv = (0, 0) at the top-left corner, v downwards (glTF's image orientation).
 TriangleMesh frontQuad(float dist, uint32_t material) {
@@ -104,7 +92,7 @@ TEST(TexturedQuad, NearestCheckerboardIsReproducedPixelForPixel) {
         bool odd = (x + y) % 2;
         return Vec4f(odd ? 0.9f : 0.1f, 0.05f + 0.1f * float(x), 0.05f + 0.1f * float(y), 1.f);
     };
-    Image image = imageOf(8, 8, texel);
+    Image image = test::imageFromTexels(8, 8, texel);
     Scene scene = furnaceQuad(image, FilterMode::Nearest, WrapMode::ClampToEdge);
     Film film = renderPt(scene, 8);
     int exact = checkPixels(film, [&](int x, int y) {
@@ -123,7 +111,7 @@ TEST(TexturedQuad, NearestCheckerboardIsReproducedPixelForPixel) {
 // value is (u, v) itself between the outer texel centres (clamped outside them).
 TEST(TexturedQuad, BilinearGradientIsReproducedWithinFilteringError) {
     auto texel = [](int x, int y) { return Vec4f((float(x) + 0.5f) / 16.f, (float(y) + 0.5f) / 16.f, 0.5f, 1.f); };
-    Image image = imageOf(16, 16, texel);
+    Image image = test::imageFromTexels(16, 16, texel);
     Scene scene = furnaceQuad(image, FilterMode::Linear, WrapMode::ClampToEdge);
     Film film = renderPt(scene, 8);
     auto filtered = [](float u) { return std::clamp(u, 0.5f / 16.f, 15.5f / 16.f); };
@@ -145,7 +133,7 @@ TEST(TexturedQuad, BilinearGradientIsReproducedWithinFilteringError) {
 // The MIP level comes from the camera footprint at the hit, a function of the point only: the
 // image is the same bits whatever the thread count.
 TEST(TexturedQuad, FilteredImageDoesNotDependOnThreadCount) {
-    Image image = imageOf(256, 256, [](int x, int y) { return Vec4f(float((x ^ y) & 1), float(x) / 255.f, float(y) / 255.f, 1.f); });
+    Image image = test::imageFromTexels(256, 256, [](int x, int y) { return Vec4f(float((x ^ y) & 1), float(x) / 255.f, float(y) / 255.f, 1.f); });
     Scene scene = furnaceQuad(image, FilterMode::Linear, WrapMode::Repeat);
     Film one = renderPt(scene, 2, 1), four = renderPt(scene, 2, 4);
     EXPECT_EQ(one.rgba(), four.rgba());
@@ -205,7 +193,7 @@ Film renderLitQuad(Vec3f lightDir, float tilt, float mapTilt, int axis, Image& n
     m.bsdf.baseColor = Rgb(0.5f);
     m.bsdf.specular = 0.f;
     Vec3f tiltedNormal = axis == 0 ? Vec3f(std::sin(mapTilt), 0.f, std::cos(mapTilt)) : Vec3f(0.f, std::sin(mapTilt), std::cos(mapTilt));
-    normalMap = imageOf(2, 2, [&](int, int) { return Vec4f(0.5f * (tiltedNormal + 1.f), 1.f); });
+    normalMap = test::imageFromTexels(2, 2, [&](int, int) { return Vec4f(0.5f * (tiltedNormal + 1.f), 1.f); });
     if (mapTilt != 0.f) m.textures.normal.image = &normalMap;
     scene.materials = {m};
     TriangleMesh q = frontQuad(1.f, 0);
@@ -315,13 +303,13 @@ TEST(NormalMap, GltfNormalTextureWithGeneratedTangentsFollowsTheImageAxes) {
 // batch variances, Šidák-corrected over bins and channels). The MIP level is a function of the hit
 // point (Camera::pixelFootprint), so camera and light sub-paths read the same filtered values.
 TEST(TexturedAgreement, EveryIntegratorAgreesInATexturedNormalMappedFurnace) {
-    Image albedo = imageOf(8, 4, [](int x, int y) { return (x + y) % 2 ? Vec4f(0.85f, 0.5f, 0.3f, 1.f) : Vec4f(0.3f, 0.6f, 0.75f, 1.f); });
+    Image albedo = test::imageFromTexels(8, 4, [](int x, int y) { return (x + y) % 2 ? Vec4f(0.85f, 0.5f, 0.3f, 1.f) : Vec4f(0.3f, 0.6f, 0.75f, 1.f); });
     uint32_t state = 2024u;
     auto uniform = [&] {
         state = state * 1664525u + 1013904223u;
         return float(state >> 8) / float(1u << 24);
     };
-    Image bumps = imageOf(16, 8, [&](int, int) {
+    Image bumps = test::imageFromTexels(16, 8, [&](int, int) {
         Vec3f n = glm::normalize(Vec3f(0.8f * (uniform() - 0.5f), 0.8f * (uniform() - 0.5f), 1.f));
         return Vec4f(0.5f * (n + 1.f), 1.f);
     });
