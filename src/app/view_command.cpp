@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -99,9 +100,21 @@ public:
         SDL_SetHint(SDL_HINT_RENDER_DRIVER, "software");
         SDL_SetHint(SDL_HINT_RENDER_SCALE_QUALITY, "nearest");
         SDL_SetHint(SDL_HINT_NO_SIGNAL_HANDLERS, "0");  // Ctrl-C arrives as SDL_QUIT: the same clean close
-        if (SDL_Init(SDL_INIT_VIDEO) != 0)
-            throw InputError(std::string("tessera view needs a display, and none could be opened (") + SDL_GetError() +
+        // Without a display SDL falls back to its "offscreen" driver, which would "show" the window
+        // to nobody: only a driver that puts a window on a screen counts (or one asked for by name
+        // through SDL_VIDEODRIVER). Wayland's client library prints its own complaint when
+        // XDG_RUNTIME_DIR is unset; with no WAYLAND_DISPLAY it cannot connect anyway.
+        const char* asked = std::getenv("SDL_VIDEODRIVER");
+        const bool x11 = std::getenv("DISPLAY") != nullptr, wayland = std::getenv("WAYLAND_DISPLAY") != nullptr;
+        const bool screenless = !asked && !x11 && !wayland;
+        if (!asked && !screenless) SDL_SetHint(SDL_HINT_VIDEODRIVER, x11 && wayland ? "x11,wayland" : x11 ? "x11" : "wayland");
+        if (screenless || SDL_Init(SDL_INIT_VIDEO) != 0 ||
+            (!asked && (std::string(SDL_GetCurrentVideoDriver()) == "offscreen" || std::string(SDL_GetCurrentVideoDriver()) == "dummy"))) {
+            std::string why = screenless ? "neither DISPLAY nor WAYLAND_DISPLAY is set" : SDL_GetError();
+            if (!screenless) SDL_Quit();
+            throw InputError("tessera view needs a display, and none could be opened (" + why +
                              "); set DISPLAY, or render without a window: tessera render SCENE");
+        }
         window_ = SDL_CreateWindow(title.c_str(), SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED, width, height, SDL_WINDOW_SHOWN);
         if (window_) renderer_ = SDL_CreateRenderer(window_, -1, SDL_RENDERER_SOFTWARE);
         if (!window_ || !renderer_) {
@@ -205,15 +218,16 @@ public:
         while (!quit_) {
             SDL_Event e;
             if (SDL_WaitEventTimeout(&e, 4)) {
-                do handleEvent(e, std::max(lastInput_, double(int64_t(e.common.timestamp) - int64_t(t0)) / 1000.0));
+                do handleEvent(e, double(int64_t(e.common.timestamp) - int64_t(t0)) / 1000.0);
                 while (!quit_ && SDL_PollEvent(&e));
             }
             double t = now();
-            // Scripted input, stamped with its own time so that motion is exact, not frame-quantised.
+            // Scripted input, stamped with its own time so that motion is exact, not frame-quantised
+            // (events are played once due, before the camera advances to now).
             for (; nextScript < script_.size() && script_[nextScript].seconds <= t && !quit_; ++nextScript)
-                handleScript(script_[nextScript], std::max(lastInput_, script_[nextScript].seconds));
+                handleScript(script_[nextScript]);
             if (a_.exitAfter > 0.0 && t >= a_.exitAfter) quit_ = true;
-            updateCamera(std::max(lastInput_, t));
+            updateCamera(t);
 
             if (auto f = session_.newFrame(version)) pending = std::move(f);
             // Moving frames at once; still passes at most 20 times a second (the conversion costs
@@ -245,8 +259,8 @@ private:
         return p;
     }
 
+    /// `t`: the event's own time (FlyCamera ignores a time earlier than one it has seen).
     void handleEvent(const SDL_Event& e, double t) {
-        lastInput_ = t;
         switch (e.type) {
             case SDL_QUIT: quit_ = true; break;
             case SDL_KEYDOWN:
@@ -267,8 +281,8 @@ private:
         }
     }
 
-    void handleScript(const view::ScriptEvent& e, double t) {
-        lastInput_ = t;
+    void handleScript(const view::ScriptEvent& e) {
+        const double t = e.seconds;
         using K = view::ScriptEvent::Kind;
         switch (e.kind) {
             case K::Down: onKey(keyFromName(e.key), true, t); break;
@@ -400,7 +414,7 @@ private:
     std::vector<view::ScriptEvent> script_;
     std::shared_ptr<const view::PreviewFrame> shown_;
     std::string exr_;
-    double lastInput_ = 0.0, lastLook_ = -1.0;
+    double lastLook_ = -1.0;
     bool quit_ = false, wasMoving_ = false;
 };
 
