@@ -98,6 +98,7 @@ class Window {
 public:
     Window(const std::string& title, int width, int height) {
         SDL_SetHint(SDL_HINT_RENDER_DRIVER, "software");
+        SDL_SetHint(SDL_HINT_FRAMEBUFFER_ACCELERATION, "0");  // the plain X11 (XShm) framebuffer: no GL driver loaded
         SDL_SetHint(SDL_HINT_RENDER_SCALE_QUALITY, "nearest");
         SDL_SetHint(SDL_HINT_NO_SIGNAL_HANDLERS, "0");  // Ctrl-C arrives as SDL_QUIT: the same clean close
         // Without a display SDL falls back to its "offscreen" driver, which would "show" the window
