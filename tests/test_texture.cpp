@@ -214,6 +214,12 @@ TEST(SampleTexture, FootprintSelectsAndBlendsMipLevels) {
     EXPECT_FLOAT_EQ(sampleTexture(tex, uv, 1.f).r, 0.5f);          // the whole texture: level 6
     float between = sampleTexture(tex, uv, std::sqrt(2.f) / 64.f).r;  // λ = ½: halfway
     EXPECT_NEAR(between, 0.25f, 1e-6f);
+    // KHR_texture_transform's scale widens the footprint in texture space: 1 texel of the mesh's uv
+    // is 2 texels after a scale of 2, so level 1.
+    tex.transform.scale = Vec2f(2.f, 2.f);
+    EXPECT_FLOAT_EQ(sampleTexture(tex, uv * 0.5f, 1.f / 64.f).r, 0.5f);
+    tex.transform.scale = Vec2f(0.5f, 0.5f);
+    EXPECT_EQ(sampleTexture(tex, uv * 2.f, 2.f / 64.f).r, 0.f);
 }
 
 TEST(SampleTexture, KhrTextureTransformFollowsTheExtensionsExample) {

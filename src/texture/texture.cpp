@@ -73,7 +73,12 @@ Vec4f lookupLevel(const TextureRef& tex, int level, Vec2f st) {
 
 Vec4f sampleTexture(const TextureRef& tex, Vec2f uv, float footprintUv) {
     if (!tex.valid() || tex.image->levels.empty()) return Vec4f(1.f);
-    if (!tex.transform.identity()) uv = tex.transform.apply(uv);
+    if (!tex.transform.identity()) {
+        uv = tex.transform.apply(uv);
+        // The footprint was measured in the mesh's uv units; the transform scales them (rotation and
+        // offset do not change lengths).
+        footprintUv *= std::max(std::abs(tex.transform.scale.x), std::abs(tex.transform.scale.y));
+    }
     if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) uv = Vec2f(0.f);
     Vec2f st(reduceCoordinate(uv.x, tex.wrapS), reduceCoordinate(uv.y, tex.wrapT));
 
