@@ -17,6 +17,7 @@ layers=(
   "integrators"
   "io"
   "render"
+  "view"
   "app api"
 )
 # Known exceptions, as "file -> included header" (none today).

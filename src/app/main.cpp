@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
     app::Runner compare = app::addCompareCommand(app);
     app::Runner validateAccel = app::addValidateAccelCommand(app);
     app::Runner benchAccel = app::addBenchAccelCommand(app);
+    app::Runner view = app::addViewCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -30,6 +31,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("compare")) return compare();
         if (app.got_subcommand("validate-accel")) return validateAccel();
         if (app.got_subcommand("bench-accel")) return benchAccel();
+        if (app.got_subcommand("view")) return view();
     } catch (const InputError& e) {
         app::printError(e.what());
         return 2;

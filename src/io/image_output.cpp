@@ -72,9 +72,7 @@ void writeExr(const std::string& path, int width, int height, const float* rgba,
     writeAtomically(path, spec, rgba);
 }
 
-void writePng(const std::string& path, int width, int height, const float* rgba,
-              const DisplayTransform& transform, const Metadata& metadata) {
-    checkArguments(path, width, height, rgba);
+std::vector<std::uint8_t> displayRgb8(int width, int height, const float* rgba, const DisplayTransform& transform) {
     const std::size_t pixelCount = std::size_t(width) * std::size_t(height);
     std::vector<float> display(rgba, rgba + 4 * pixelCount);
     transform.apply(display.data(), width, height);
@@ -83,6 +81,13 @@ void writePng(const std::string& path, int width, int height, const float* rgba,
     for (std::size_t i = 0; i < pixelCount; ++i) {
         for (int c = 0; c < 3; ++c) rgb[3 * i + c] = quantize(display[4 * i + c]);
     }
+    return rgb;
+}
+
+void writePng(const std::string& path, int width, int height, const float* rgba,
+              const DisplayTransform& transform, const Metadata& metadata) {
+    checkArguments(path, width, height, rgba);
+    std::vector<std::uint8_t> rgb = displayRgb8(width, height, rgba, transform);
 
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
     addMetadata(spec, metadata);

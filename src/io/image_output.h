@@ -3,6 +3,7 @@
 /// Writing rendered images (float EXR, display-referred PNG) and reading any image back as float
 /// RGBA, through OpenImageIO. Writes are atomic: a crash, a full disk or a bad path never leaves
 /// a half-written or clobbered file at the destination.
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -36,6 +37,10 @@ void writeExr(const std::string& path, int width, int height, const float* rgba,
 /// `metadata` becomes PNG text chunks. Same atomicity, directory creation and errors as writeExr.
 void writePng(const std::string& path, int width, int height, const float* rgba,
               const DisplayTransform& transform, const Metadata& metadata);
+
+/// The PNG's pixels: `rgba` through `transform`, clamped and rounded to 8 bits, packed RGB rows from
+/// the top (what writePng stores, and what `tessera view` shows in its window).
+std::vector<std::uint8_t> displayRgb8(int width, int height, const float* rgba, const DisplayTransform& transform);
 
 /// Reads the first subimage of any file OIIO can open, converted to float RGBA: one channel is
 /// replicated to R, G and B; two channels are read as grey + alpha; with no alpha channel, alpha
