@@ -13,6 +13,7 @@
 #include "accel/bvh_builder.h"
 #include "accel/kernel_isa.h"
 #include "accel/primitive_refs.h"
+#include "accel/triangle_simd.h"
 #include "core/huge_page_allocator.h"
 
 namespace tessera {
@@ -50,12 +51,16 @@ public:
         uint32_t child[8];
     };
     /// Up to four triangles of one leaf, SoA: p[vertex][axis][lane]. Unused lanes hold NaN vertices,
-    /// which the watertight test rejects without a separate mask.
+    /// which the watertight test rejects without a separate mask. geomId carries kMaskedLaneBit
+    /// where the lane's mesh is a cut-out (its alpha mask filters the hits).
     struct alignas(16) Triangle4 {
         float p[3][3][4];
         uint32_t geomId[4];
         uint32_t primId[4];
     };
+    /// Set in Triangle4::geomId for a lane whose mesh has an alpha mask: the traversal reads it only
+    /// when that lane is the leaf's answer, so unmasked scenes pay one predictable branch per leaf hit.
+    static constexpr uint32_t kMaskedLaneBit = 0x80000000u;
 
     /// Child reference: inner node (its byte offset in the node array, once built), or a leaf
     /// (kLeafBit). Triangle-only leaf: the first Triangle4 block's byte offset / 16, << 2 | (blocks − 1).
@@ -72,6 +77,9 @@ private:
     bool intersectCoherentAvx2(const Ray& ray, Hit& hit) const;
     bool occludedAvx2(const Ray& ray) const;
 
+    /// The leaf answer `c` of block `tri` (lane ≥ 0, on a masked lane) redone with the alpha masks:
+    /// the nearest kept lane (closest hit) or any kept lane (kAnyHit), lane −1 when none is kept.
+    template <bool kAnyHit> TriangleCandidate filterMaskedLanes(const TriRay& r, const Triangle4& tri, float tMax) const;
     void prefetchChild(uint32_t ref) const;
     void prefetchAny(uint32_t ref) const;
     /// The first Triangle4 block of a triangle leaf reference.

@@ -10,6 +10,7 @@
 #include "accel/mixed_leaf.h"
 #include "accel/robust_bounds.h"
 #include "accel/triangle_simd.h"
+#include "geometry/alpha_mask.h"
 
 namespace tessera {
 
@@ -79,11 +80,22 @@ struct BoxRay {
 TESSERA_INLINE TriangleCandidate intersectTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
     return intersectTriangles<4, false>(r, tri.p, tMax);
 }
-TESSERA_INLINE bool occludedTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
-    return intersectTriangles<4, true>(r, tri.p, tMax).lane >= 0;
+/// A lane the ray hits (any), or −1.
+TESSERA_INLINE int occludedTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
+    return intersectTriangles<4, true>(r, tri.p, tMax).lane;
 }
 
 }  // namespace
+
+// Out of line: the slow path of cut-out leaves stays out of the kernels' hot loops.
+template <bool kAnyHit>
+__attribute__((noinline)) TriangleCandidate BvhAccel::filterMaskedLanes(const TriRay& r, const Triangle4& tri, float tMax) const {
+    auto keep = [&](int lane, float u, float v) {
+        uint32_t geomId = tri.geomId[lane];
+        return !(geomId & kMaskedLaneBit) || alphaMaskKeeps(geometry_.meshes[geomId & ~kMaskedLaneBit], tri.primId[lane], u, v);
+    };
+    return intersectTrianglesFiltered<4, kAnyHit>(r, tri.p, tMax, keep);
+}
 
 /// Starts loading a child the ray will (probably) visit: the traversal is bound by cache misses on
 /// incoherent rays (a node is 3.5 lines, a leaf block 2.75), and issuing every hit child's lines at
@@ -204,6 +216,12 @@ TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                 const Triangle4& tri = blockPtr[b];
                 TriangleCandidate c = intersectTriangle4(triRay, tri, tMax);
                 if (c.lane < 0) continue;
+                // A cut-out triangle's hit counts only where its alpha mask keeps it; if not, the
+                // block's next-nearest lane may still be the answer.
+                if (tri.geomId[c.lane] & kMaskedLaneBit) [[unlikely]] {
+                    c = filterMaskedLanes<false>(triRay, tri, tMax);
+                    if (c.lane < 0) continue;
+                }
                 tMax = c.t, bestU = c.u, bestV = c.v;
                 tMaxPadded = splat8(padUp(tMax));
                 bestBlock = &tri, bestLane = c.lane;
@@ -224,7 +242,8 @@ TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
     }
 done:
     if (bestBlock) {
-        triangleHitRecord(bestBlock->p, bestLane, tMax, bestU, bestV, {bestBlock->geomId[bestLane], bestBlock->primId[bestLane]}, hit);
+        PrimRef id{bestBlock->geomId[bestLane] & ~kMaskedLaneBit, bestBlock->primId[bestLane]};
+        triangleHitRecord(bestBlock->p, bestLane, tMax, bestU, bestV, id, hit);
         return true;
     }
     if (bestMixed.geomId != kInvalidId) {
@@ -280,8 +299,11 @@ TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
         } else if (!(ref & kMixedBit)) {
             const Triangle4* blockPtr = leafBlocks(ref);
             uint32_t blocks = (ref & 3u) + 1;
-            for (uint32_t b = 0; b < blocks; ++b)
-                if (occludedTriangle4(triRay, blockPtr[b], tMax)) return true;
+            for (uint32_t b = 0; b < blocks; ++b) {
+                int lane = occludedTriangle4(triRay, blockPtr[b], tMax);
+                if (lane >= 0 && (!(blockPtr[b].geomId[lane] & kMaskedLaneBit) || filterMaskedLanes<true>(triRay, blockPtr[b], tMax).lane >= 0))
+                    return true;
+            }
         } else {
             uint32_t first = (ref & ~(kLeafBit | kMixedBit)) >> 4, count = ref & 15u;
             MixedCandidate unused;

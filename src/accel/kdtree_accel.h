@@ -16,6 +16,7 @@
 #include "accel/kernel_isa.h"
 #include "accel/primitive_refs.h"
 #include "accel/kdtree_wide.h"
+#include "accel/triangle_simd.h"
 #include "geometry/clip.h"
 
 namespace tessera {
@@ -89,6 +90,13 @@ private:
     void buildLeafBlocks();
     /// The wide-node reference of a leaf over prims_[order[0 .. count)], its blocks appended.
     uint32_t makeLeaf(const uint32_t* order, uint32_t count);
+    /// True when one of prims_[order[0 .. count)] (triangles) belongs to a mesh with an alpha mask.
+    bool holdsMaskedTriangle(const uint32_t* order, uint32_t count) const;
+    /// Block `block`'s answer `c` (lane ≥ 0) in a leaf holding cut-out triangles: `c` itself when
+    /// its triangle is opaque, otherwise the block redone with the alpha masks (the nearest kept
+    /// lane, or with kAnyHit any kept lane; lane −1 when none is kept).
+    template <bool kAnyHit>
+    TriangleCandidate filterMaskedLanes(const TriRay8& r, size_t block, float tMax, TriangleCandidate c) const;
     /// A leaf-table entry's reference (leaves a reference cannot describe inline).
     uint32_t tableRef(KdLeafRecord rec);
 

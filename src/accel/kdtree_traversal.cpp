@@ -15,6 +15,7 @@
 #include "accel/mixed_leaf.h"
 #include "accel/robust_bounds.h"
 #include "accel/triangle_simd.h"
+#include "geometry/alpha_mask.h"
 
 namespace tessera {
 
@@ -188,6 +189,19 @@ TESSERA_INLINE bool startRay(const Ray& ray, const Bounds3f& rootCell_, float sc
 
 }  // namespace
 
+// Out of line: the slow path of cut-out leaves stays out of the kernels' hot loops.
+template <bool kAnyHit>
+__attribute__((noinline)) TriangleCandidate KdTreeAccel::filterMaskedLanes(const TriRay8& r, size_t block, float tMax,
+                                                                           TriangleCandidate c) const {
+    const PrimRef* ids = &blockIds_[block * kLanes];
+    auto keep = [&](int lane, float u, float v) {
+        const TriangleMesh& mesh = geometry_.meshes[ids[lane].geomId];
+        return !mesh.alphaMask || alphaMaskKeeps(mesh, ids[lane].primId, u, v);
+    };
+    if (!geometry_.meshes[ids[c.lane].geomId].alphaMask) return c;
+    return intersectTrianglesFiltered<kLanes, kAnyHit>(r, triangles_[block].p, tMax, keep);
+}
+
 /// The closest-hit kernel: entered slots visited in the binary traversal's near-first order, the
 /// others pushed. There is no separate early exit: once a hit is found, every pushed segment that
 /// starts beyond it is dropped when popped, and in near-first order that is everything behind the
@@ -269,6 +283,12 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                 for (uint32_t b = 0; b < leaf.count; ++b) {
                     TriangleCandidate c = intersectTriangles<8, false>(triRay, blocks[b].p, tHit);
                     if (c.lane < 0) continue;
+                    // A cut-out triangle's hit counts only where its alpha mask keeps it; if not,
+                    // the block's next-nearest lane may still be the answer.
+                    if (ref & kKdMaskedLeafBit) [[unlikely]] {
+                        c = filterMaskedLanes<false>(triRay, leaf.first + b, tHit, c);
+                        if (c.lane < 0) continue;
+                    }
                     tHit = c.t, bestU = c.u, bestV = c.v;
                     bestBlock = &blocks[b], bestLane = c.lane;
                 }
@@ -338,8 +358,11 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
             const LeafSpan leaf = leafSpan(ref);
             if (!leaf.mixed) {
                 const TriangleBlock* blocks = triangles_.data() + leaf.first;
-                for (uint32_t b = 0; b < leaf.count; ++b)
-                    if (intersectTriangles<8, true>(triRay, blocks[b].p, tHit).lane >= 0) return true;
+                for (uint32_t b = 0; b < leaf.count; ++b) {
+                    TriangleCandidate c = intersectTriangles<8, true>(triRay, blocks[b].p, tHit);
+                    if (c.lane >= 0 && (!(ref & kKdMaskedLeafBit) || filterMaskedLanes<true>(triRay, leaf.first + b, tHit, c).lane >= 0))
+                        return true;
+                }
             } else {
                 MixedCandidate unused;
                 float t = tHit;
