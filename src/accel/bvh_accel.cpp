@@ -162,6 +162,7 @@ uint32_t BvhAccel::makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf) {
             PrimRef ref = lane < count ? prims_[order[4 * b + lane]] : PrimRef{kInvalidId, kInvalidId};
             bool masked = lane < count && geometry_.meshes[ref.geomId].alphaMask;
             t.geomId[lane] = ref.geomId | (masked ? kMaskedLaneBit : 0u);
+            hasMaskedLanes_ |= masked;
             t.primId[lane] = ref.primId;
         }
     }

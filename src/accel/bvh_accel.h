@@ -59,7 +59,7 @@ public:
         uint32_t primId[4];
     };
     /// Set in Triangle4::geomId for a lane whose mesh has an alpha mask: the traversal reads it only
-    /// when that lane is the leaf's answer, so unmasked scenes pay one predictable branch per leaf hit.
+    /// when that lane is a leaf's answer, and only in scenes that have cut-outs (hasMaskedLanes_).
     static constexpr uint32_t kMaskedLaneBit = 0x80000000u;
 
     /// Child reference: inner node (its byte offset in the node array, once built), or a leaf
@@ -104,6 +104,9 @@ private:
     Bounds3f bounds_;
     AccelStats stats_;
     KernelIsa isa_;
+    /// Some leaf lane carries kMaskedLaneBit: scenes without cut-outs never read the lanes' geomId
+    /// before the final hit record (a line the triangle test may not have touched).
+    bool hasMaskedLanes_ = false;
 };
 
 }  // namespace tessera

@@ -218,7 +218,7 @@ TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                 if (c.lane < 0) continue;
                 // A cut-out triangle's hit counts only where its alpha mask keeps it; if not, the
                 // block's next-nearest lane may still be the answer.
-                if (tri.geomId[c.lane] & kMaskedLaneBit) [[unlikely]] {
+                if (hasMaskedLanes_ && (tri.geomId[c.lane] & kMaskedLaneBit)) [[unlikely]] {
                     c = filterMaskedLanes<false>(triRay, tri, tMax);
                     if (c.lane < 0) continue;
                 }
@@ -301,7 +301,8 @@ TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
             uint32_t blocks = (ref & 3u) + 1;
             for (uint32_t b = 0; b < blocks; ++b) {
                 int lane = occludedTriangle4(triRay, blockPtr[b], tMax);
-                if (lane >= 0 && (!(blockPtr[b].geomId[lane] & kMaskedLaneBit) || filterMaskedLanes<true>(triRay, blockPtr[b], tMax).lane >= 0))
+                if (lane >= 0 && (!hasMaskedLanes_ || !(blockPtr[b].geomId[lane] & kMaskedLaneBit) ||
+                                  filterMaskedLanes<true>(triRay, blockPtr[b], tMax).lane >= 0))
                     return true;
             }
         } else {
