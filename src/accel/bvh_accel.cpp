@@ -66,6 +66,7 @@ BvhAccel::BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, c
     bounds_ = geometry.bounds();
     // Leaf lanes keep a mesh's alpha-mask flag in geomId's top bit (kMaskedLaneBit).
     if (geometry.meshes.size() >= size_t(kMaskedLaneBit)) throw std::runtime_error("bvh: more than 2^31 meshes");
+    for (const TriangleMesh& m : geometry.meshes) hasCutOuts_ |= m.alphaMask && !m.triangles.empty();
     // The watertight test may place a hit a few ulps outside the exact triangle (its shear rounds):
     // padded boxes make sure a box face through an edge never hides such a hit.
     GatheredPrimitives gathered = gatherPrimitives(geometry, /*padTriangles=*/true);
@@ -162,7 +163,6 @@ uint32_t BvhAccel::makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf) {
             PrimRef ref = lane < count ? prims_[order[4 * b + lane]] : PrimRef{kInvalidId, kInvalidId};
             bool masked = lane < count && geometry_.meshes[ref.geomId].alphaMask;
             t.geomId[lane] = ref.geomId | (masked ? kMaskedLaneBit : 0u);
-            hasMaskedLanes_ |= masked;
             t.primId[lane] = ref.primId;
         }
     }

@@ -19,6 +19,7 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& /*op
     : geometry_(geometry), config_(config) {
     auto start = std::chrono::steady_clock::now();
     bounds_ = geometry.bounds();
+    for (const TriangleMesh& m : geometry.meshes) hasCutOuts_ |= m.alphaMask && !m.triangles.empty();
     // Exact boxes: padding them would make neighbours sharing a vertex straddle every plane through
     // it. The traversal is conservative instead (kdtree_traversal.cpp).
     GatheredPrimitives gathered = gatherPrimitives(geometry, /*padTriangles=*/false);

@@ -71,14 +71,13 @@ struct TriangleCandidate {
     int lane;  ///< −1: no lane hit
 };
 
-/// The lanes of a leaf block that the ray hits in (tMin, tMax): bit i of the result set when lane i
-/// is hit, at t[i] with barycentrics (V[i]·invDet[i], Wf[i]·invDet[i]). With `kSkipWhenNone`, returns
-/// 0 before the division when no lane can hit (the outputs are then left unset). The one copy of
-/// the arithmetic behind intersectTriangles and intersectTrianglesFiltered, so both give the same
-/// bits.
-template <int W, bool kSkipWhenNone>
-TESSERA_INLINE uint32_t triangleLaneHits(const TriRayW<W>& r, const float (&p)[3][3][W], float tMax, typename Lanes<W>::F& t,
-                                         typename Lanes<W>::F& V, typename Lanes<W>::F& Wf, typename Lanes<W>::F& invDet) {
+/// The nearest lane hit in (tMin, tMax), or lane −1 (among lanes at equal t, the lowest). With
+/// `kAnyHit`, any hitting lane (same arithmetic, so the same answer as the closest-hit test),
+/// without the serial search for the nearest lane and without barycentrics. Lanes set in
+/// `skipLanes` are ignored (the alpha-mask path below; a constant 0 everywhere else, which folds away).
+template <int W, bool kAnyHit>
+TESSERA_INLINE TriangleCandidate intersectTriangles(const TriRayW<W>& r, const float (&p)[3][3][W], float tMax,
+                                                    uint32_t skipLanes = 0) {
     using L = Lanes<W>;
     using F = typename L::F;
     using I = typename L::I;
@@ -91,8 +90,8 @@ TESSERA_INLINE uint32_t triangleLaneHits(const TriRayW<W>& r, const float (&p)[3
     F bx = bX - sx * bZ, by = bY - sy * bZ;
     F cx = cX - sx * cZ, cy = cY - sy * cZ;
     F U = cx * by - cy * bx;
-    V = ax * cy - ay * cx;
-    Wf = bx * ay - by * ax;
+    F V = ax * cy - ay * cx;
+    F Wf = bx * ay - by * ax;
     F zero{};
     uint32_t zeroLanes = L::mask((U == zero) | (V == zero) | (Wf == zero));
     if (zeroLanes) [[unlikely]] {
@@ -111,22 +110,13 @@ TESSERA_INLINE uint32_t triangleLaneHits(const TriRayW<W>& r, const float (&p)[3
     // The closest-hit test leaves here when no lane can hit (it saves the division); the any-hit
     // test goes straight on to its single final branch: there this exit is mispredicted more often
     // than the division costs.
-    if constexpr (kSkipWhenNone)
-        if (!L::mask(valid)) return 0;
+    if constexpr (!kAnyHit)
+        if (!L::mask(valid)) return {0.f, 0.f, 0.f, -1};
     F T = U * (sz * aZ) + V * (sz * bZ) + Wf * (sz * cZ);
-    invDet = L::splat(1.f) / det;
-    t = T * invDet;
+    F invDet = L::splat(1.f) / det;
+    F t = T * invDet;
     valid &= (t > L::splat(r.tMin)) & (t < L::splat(tMax));
-    return L::mask(valid);
-}
-
-/// The nearest lane hit in (tMin, tMax), or lane −1 (among lanes at equal t, the lowest). With
-/// `kAnyHit`, any hitting lane (same arithmetic, so the same answer as the closest-hit test), without
-/// the serial search for the nearest lane and without barycentrics.
-template <int W, bool kAnyHit>
-TESSERA_INLINE TriangleCandidate intersectTriangles(const TriRayW<W>& r, const float (&p)[3][3][W], float tMax) {
-    typename Lanes<W>::F t, V, Wf, invDet;
-    uint32_t bits = triangleLaneHits<W, !kAnyHit>(r, p, tMax, t, V, Wf, invDet);
+    uint32_t bits = L::mask(valid) & ~skipLanes;
     if constexpr (kAnyHit) return {0.f, 0.f, 0.f, bits ? __builtin_ctz(bits) : -1};
     TriangleCandidate best{tMax, 0.f, 0.f, -1};
     while (bits) {
@@ -138,26 +128,19 @@ TESSERA_INLINE TriangleCandidate intersectTriangles(const TriRayW<W>& r, const f
 }
 
 /// intersectTriangles for a block holding cut-out triangles (geometry/alpha_mask.h): a lane counts
-/// only where `keep(lane, u, v)` says so. The lanes hit are taken nearest first (lowest lane among
-/// equal t, as intersectTriangles) and the first one kept is returned, so a rejected lane never
-/// hides the next-nearest hit behind it; with `kAnyHit` the answer is whether any lane is kept (the
-/// same set of lanes, with the same barycentrics, as the closest-hit test). Called only when
-/// intersectTriangles' answer lies on a masked triangle: unmasked geometry never runs it.
-template <int W, bool kAnyHit, class Keep>
+/// only where `keep(lane, u, v)` says so. The block is tested again without each rejected lane, so
+/// a rejected lane never hides the next-nearest hit behind it; the answer is the nearest kept lane
+/// (lowest lane among equal t, as intersectTriangles), or lane −1. Any-hit queries ask it too, so
+/// they keep and drop the same lanes, with the same barycentrics, as closest-hit ones. Called only
+/// on a masked triangle's hit: unmasked geometry never runs it.
+template <int W, class Keep>
 inline TriangleCandidate intersectTrianglesFiltered(const TriRayW<W>& r, const float (&p)[3][3][W], float tMax, const Keep& keep) {
-    typename Lanes<W>::F t, V, Wf, invDet;
-    uint32_t bits = triangleLaneHits<W, true>(r, p, tMax, t, V, Wf, invDet);
-    while (bits) {
-        int nearest = __builtin_ctz(bits);
-        for (uint32_t rest = bits & (bits - 1); rest; rest &= rest - 1) {
-            int i = __builtin_ctz(rest);
-            if (t[i] < t[nearest]) nearest = i;
-        }
-        float u = V[nearest] * invDet[nearest], v = Wf[nearest] * invDet[nearest];
-        if (keep(nearest, u, v)) return {kAnyHit ? 0.f : t[nearest], u, v, nearest};
-        bits &= ~(1u << nearest);
+    uint32_t rejected = 0;
+    while (true) {
+        TriangleCandidate c = intersectTriangles<W, false>(r, p, tMax, rejected);
+        if (c.lane < 0 || keep(c.lane, c.u, c.v)) return c;
+        rejected |= 1u << c.lane;
     }
-    return {0.f, 0.f, 0.f, -1};
 }
 
 /// Fills the W lanes of a leaf block, p[vertex][axis][lane], with the vertices of `count` ≤ W
