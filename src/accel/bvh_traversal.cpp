@@ -1,7 +1,8 @@
 /// \file bvh_traversal.cpp
 /// The BVH's traversal kernels: closest hit (nearest-first, with a branch-free path for incoherent
 /// rays and a branching one for coherent rays) and any hit (unordered), each compiled for the
-/// default target and for AVX2 (kernel_isa.h).
+/// default target and for AVX2 (kernel_isa.h), and once more with the alpha-mask test of cut-out
+/// triangles (kMasked) for scenes that have them.
 #include <cmath>
 #include <cstring>
 

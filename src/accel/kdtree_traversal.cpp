@@ -5,7 +5,8 @@
 /// planes with a side each) clips the current segment; the entered slots are visited in the binary
 /// traversal's near-first order (closest-hit) or in any order (any-hit), the others pushed. The
 /// closest-hit kernel drops every pushed segment that starts beyond its hit; the any-hit kernel
-/// stops at the first hit.
+/// stops at the first hit. Scenes with cut-out triangles (alpha masks) run a second instantiation of
+/// both (kMasked) that drops the hits the masks drop.
 #include <cmath>
 #include <cstring>
 #include <limits>
