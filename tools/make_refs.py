@@ -6,6 +6,12 @@ Usage:
     python3 tools/make_refs.py cornell-box furnace  # only these
     python3 tools/make_refs.py --scale 0.25 NAME    # quick trial: a quarter of the samples, into --out
     python3 tools/make_refs.py --readme             # only rebuild refs/README.md from refs/refs.json
+    python3 tools/make_refs.py --rehash NAME ...    # restamp the scene hash of existing references
+
+--rehash is for a scene-file change that provably leaves every image bit-identical (for example an
+extension stating what the renderer already assumed): render the scene with the old and the new file
+first and check `tessera compare` reports a max error of 0. It rewrites tessera:scene_hash in
+refs/NAME.exr and NAME-stderr.exr (pixels unchanged) and in refs/refs.json, and renders nothing.
 
 For each scene: K renders with independent seeds (1000, 1001, ...) of the scene's most robust
 integrator; the reference is their per-pixel mean and the standard-error image is the standard error
@@ -72,6 +78,8 @@ SCENES = {
     "point-light-specular": ("scenes/point-light-specular/point-light-specular.gltf", "128x96",
                              "bdpt", 128, None, 0),
     "furnace": ("scenes/furnace/furnace.gltf", "64x64", "bdpt", 32, "ptnee", 64),
+    "webxr-controllers": ("scenes/webxr/webxr-controllers.gltf", "128x96", "bdpt", 32, "ptnee", 64),
+    "webxr-lineup": ("scenes/webxr/webxr-lineup.gltf", "160x90", "bdpt", 32, "ptnee", 64),
 }
 
 WHY = {
@@ -95,6 +103,10 @@ WHY = {
     "point-light-specular": "point light: ptnee misses the caustics, lt what the mirror shows; bdpt samples "
                             "all but point light -> specular -> diffuse -> specular -> camera (no method can)",
     "furnace": "analytic: every pixel Le / (1 - a) = (2, 1.4286, 3.3333)",
+    "webxr-controllers": "third-party glTF assets (TESSERA_asset_gltf) under an area light: bdpt and ptnee both "
+                         "sample every path",
+    "webxr-lineup": "third-party glTF assets, two of them emissive, one with a transmissive part: bdpt and ptnee "
+                    "both sample every path (the transmissive part's caustics only through BSDF sampling in ptnee)",
 }
 
 
@@ -238,14 +250,17 @@ def write_readme(db):
         "that has rendered, reads as 0); `tessera compare` reads them.",
         "",
         "Regenerate (slow; niced, 2 threads): `python3 tools/make_refs.py [NAME...]`, after",
-        "`tools/fetch_assets.sh` for the dragons.",
+        "`tools/fetch_assets.sh` for the dragons and the WebXR controllers.",
         "",
         "Agreement: a second, independent integrator rendered the same way (seeds 2000…2007) where it",
         "can sample every path; z = |a − b| / sqrt(σa² + σb²) per pixel channel; mean ratio = its image",
         "mean / the reference's. With K = 8 renders each σ has 7 degrees of freedom, so about 1% of",
         "channels exceed 3σ even when both agree; heavy-tailed estimators (ptnee's BSDF-sampled caustics)",
-        "underestimate their own σ and show more. The dragon scenes read the Stanford dragon that",
-        "`tools/fetch_assets.sh` fetches (SHA-256 checked), found through `TESSERA_ASSETS` or the fetch cache.",
+        "underestimate their own σ and show more. The dragon scenes read the Stanford dragon and the",
+        "webxr scenes the WebXR input-profile GLBs (MIT) that `tools/fetch_assets.sh` fetches (SHA-256",
+        "checked), found through `TESSERA_ASSETS` or the fetch cache; the webxr references show the",
+        "renderer's materials of their date (textures and the full glTF material model make them stale:",
+        "regenerate them when those land).",
         "",
         "| reference | integrator, renders × spp | resolution | render s | mean RGB | median rel. stderr | agreement | why this integrator |",
         "|---|---|---|---|---|---|---|---|",
@@ -272,8 +287,46 @@ def write_readme(db):
         f.write("\n".join(lines))
 
 
+def fnv1a64_of_file(path):
+    """The scene hash the renderer writes (tessera:scene_hash): FNV-1a 64 of the file's bytes."""
+    h = 0xcbf29ce484222325
+    with open(path, "rb") as f:
+        for b in f.read():
+            h = ((h ^ b) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+    return "fnv1a64:%016x" % h
+
+
+def rehash(names):
+    study_deps.ensure_packages(("numpy", "OpenImageIO"))
+    import exr_io
+    db_path = os.path.join(REFS, "refs.json")
+    with open(db_path) as f:
+        db = json.load(f)
+    for name in names:
+        new = fnv1a64_of_file(os.path.join(ROOT, SCENES[name][0]))
+        for suffix in ("", "-stderr"):
+            path = os.path.join(REFS, name + suffix + ".exr")
+            pixels, meta = exr_io.read_exr(path)
+            meta = {k: v for k, v in meta.items() if k.startswith("tessera:")}
+            meta["tessera:scene_hash"] = new
+            exr_io.write_exr(path, pixels, meta)
+        db[name]["scene_hash"] = new
+        print("%s: scene_hash %s" % (name, new), file=sys.stderr)
+    with open(db_path, "w") as f:
+        json.dump(db, f, indent=1)
+        f.write("\n")
+    write_readme(db)
+    return 0
+
+
 def main(argv):
     args = argv[1:]
+    if args and args[0] == "--rehash":
+        unknown = [a for a in args[1:] if a not in SCENES]
+        if unknown or not args[1:]:
+            print("--rehash needs scene names; unknown: " + ", ".join(unknown))
+            return 2
+        return rehash(args[1:])
     threads, scale, out_dir = 2, 1.0, REFS
     names = []
     while args:

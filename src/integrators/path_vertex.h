@@ -35,8 +35,9 @@ struct PathVertex {
     bool onSurface() const { return type == VertexType::Surface || (type == VertexType::Light && ng != Vec3f(0.f)); }
     /// The normal used to offset shadow-ray ends (zero: no surface to leave, e.g. the lens, a point light).
     Vec3f offsetNormal() const { return type == VertexType::Camera ? Vec3f(0.f) : ng; }
-    /// True when this vertex can end a connection edge (Veach's "connectible").
-    bool connectible() const { return !delta; }
+    /// True when this vertex can end a connection edge (Veach's "connectible"): its BSDF has a
+    /// non-delta lobe, even where its own walk sampled a delta one (a smooth coat over a diffuse base).
+    bool connectible() const { return !delta || (type == VertexType::Surface && !isDeltaMaterial(bsdf)); }
 };
 
 /// Converts a solid-angle density at `from` into an area density at `to`: pdfW · |cos θ_to| / d²

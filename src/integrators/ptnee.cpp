@@ -55,9 +55,9 @@ void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, cons
         trace->add("lightPdfW", ls.pdfW);
         if (!ls.isDelta) trace->add("lightBsdfPdfW", bsdf.pdfFwdW(wo, wi));
     }
-    // Reflection-only BSDFs: wi must leave on wo's side of the *geometric* surface, or a shading
-    // normal would let light through (Veach 1997, §5.3).
-    if (!(dist > 0.f && glm::dot(wi, si.ng) * glm::dot(wo, si.ng) > 0.f)) return;
+    // Which side of the geometric surface wi may leave on (reflection or transmission) is the BSDF's
+    // side rule, inside evalWithPdf (Veach 1997, §5.3).
+    if (!(dist > 0.f)) return;
     float bsdfPdfW;
     Rgb f = bsdf.evalWithPdf(wo, wi, TransportMode::Radiance, bsdfPdfW) * std::abs(glm::dot(wi, bsdf.ns()));
     if (isBlack(f) || !lightVisible(ctx.accel, si.p, si.ng, ls)) return;

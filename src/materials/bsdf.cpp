@@ -1,34 +1,15 @@
 #include "materials/bsdf.h"
 
 #include "core/sampling.h"
+#include "materials/bsdf_local.h"
+#include "materials/gltf_pbr.h"
 
 namespace tessera {
 namespace {
 
-inline float cosTheta(const Vec3f& w) { return w.z; }
-inline float cos2Theta(const Vec3f& w) { return w.z * w.z; }
-inline float sin2Theta(const Vec3f& w) { return std::max(0.f, 1.f - cos2Theta(w)); }
-inline float tan2Theta(const Vec3f& w) { return sin2Theta(w) / cos2Theta(w); }
-inline Vec3f reflectLocal(const Vec3f& w) { return {-w.x, -w.y, w.z}; }
+using namespace bsdf_local;
 
-/// Schlick's approximation with a coloured F0 (Schlick 1994), as glTF's metal model prescribes.
-inline Rgb fresnelSchlick(const Rgb& f0, float cosTheta) {
-    float m = std::clamp(1.f - cosTheta, 0.f, 1.f);
-    float m2 = m * m;
-    return f0 + (Rgb(1.f) - f0) * (m2 * m2 * m);
-}
-
-/// Refracts `wi` about the +z normal (wi and the normal on the same side); eta = η_t / η_i.
-inline bool refractLocal(const Vec3f& wi, float eta, Vec3f& wt) {
-    float cosI = wi.z;
-    float sin2T = sin2Theta(wi) / (eta * eta);
-    if (sin2T >= 1.f) return false;
-    float cosT = std::sqrt(1.f - sin2T);
-    wt = -wi / eta + Vec3f(0.f, 0.f, cosI / eta - cosT);
-    return true;
-}
-
-inline float alphaOf(const BsdfParams& m) { return std::max(m.alpha, 1e-3f); }
+inline float alphaOf(const BsdfParams& m) { return std::max(m.alpha, kMinAlpha); }
 
 }  // namespace
 
@@ -78,12 +59,28 @@ Vec3f sampleVisibleNormal(const Vec3f& wo, float alpha, Vec2f u) {
 }  // namespace ggx
 
 void finalizeBsdfParams(BsdfParams& p) {
-    if (p.transmission > 0.f) p.type = MaterialType::Dielectric;
-    else if (p.metallic >= 0.5f) p.type = p.alpha == 0.f ? MaterialType::Mirror : MaterialType::RoughConductor;
-    else p.type = MaterialType::Diffuse;
+    bool smooth = p.alpha < kMinAlpha;
+    if (p.metallic == 0.f && p.transmission == 0.f && p.specular == 0.f) p.type = MaterialType::Diffuse;
+    else if (p.metallic == 1.f) p.type = smooth ? MaterialType::Mirror : MaterialType::RoughConductor;
+    else if (p.metallic == 0.f && p.transmission == 1.f && smooth && !p.thinWalled && p.specular == 1.f && p.specularColor == Rgb(1.f))
+        p.type = MaterialType::Dielectric;
+    else p.type = MaterialType::Pbr;
+    p.coatFresnelAvg = p.type == MaterialType::Pbr ? pbrCoatFresnelAverage(p) : 0.f;
+}
+
+bool isDeltaMaterial(const BsdfParams& m) {
+    switch (m.type) {
+    case MaterialType::Mirror:
+    case MaterialType::Dielectric: return true;
+    case MaterialType::Pbr: return !pbrHasNonDeltaLobe(m);
+    case MaterialType::Diffuse:
+    case MaterialType::RoughConductor: return false;
+    }
+    return false;
 }
 
 Rgb evalBsdf(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) {
+    if (m.type == MaterialType::Pbr) return evalPbr(m, woIn, wiIn, mode);
     if (woIn.z == 0.f) return Rgb(0.f);
     // Two-sided: mirror the frame so that wo is above the surface.
     float flip = woIn.z < 0.f ? -1.f : 1.f;
@@ -103,12 +100,14 @@ Rgb evalBsdf(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, Transpor
     }
     case MaterialType::Mirror:
     case MaterialType::Dielectric:
+    case MaterialType::Pbr:  // dispatched above
         return Rgb(0.f);
     }
     return Rgb(0.f);
 }
 
 float pdfBsdfW(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn) {
+    if (m.type == MaterialType::Pbr) return pdfPbr(m, woIn, wiIn);
     if (woIn.z == 0.f) return 0.f;
     float flip = woIn.z < 0.f ? -1.f : 1.f;
     Vec3f wo(woIn.x, woIn.y, woIn.z * flip), wi(wiIn.x, wiIn.y, wiIn.z * flip);
@@ -128,12 +127,20 @@ float pdfBsdfW(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn) {
     }
     case MaterialType::Mirror:
     case MaterialType::Dielectric:
+    case MaterialType::Pbr:  // dispatched above
         return 0.f;
     }
     return 0.f;
 }
 
+Rgb evalBsdfWithPdf(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal, TransportMode mode, float& pdfW) {
+    if (m.type == MaterialType::Pbr) return evalPdfPbr(m, woLocal, wiLocal, mode, pdfW);
+    pdfW = pdfBsdfW(m, woLocal, wiLocal);
+    return evalBsdf(m, woLocal, wiLocal, mode);
+}
+
 bool sampleBsdf(const BsdfParams& m, const Vec3f& woIn, float uLobe, Vec2f u, TransportMode mode, BsdfSample& out) {
+    if (m.type == MaterialType::Pbr) return samplePbr(m, woIn, uLobe, u, mode, out);
     if (woIn.z == 0.f) return false;
     float flip = woIn.z < 0.f ? -1.f : 1.f;
     Vec3f wo(woIn.x, woIn.y, woIn.z * flip);
@@ -179,6 +186,8 @@ bool sampleBsdf(const BsdfParams& m, const Vec3f& woIn, float uLobe, Vec2f u, Tr
         out.eta = eta;
         return true;
     }
+    case MaterialType::Pbr:  // dispatched above
+        return false;
     case MaterialType::RoughConductor: {
         float a = alphaOf(m);
         Vec3f wm = ggx::sampleVisibleNormal(wo, a, u);

@@ -16,19 +16,35 @@ struct BsdfSample {
     float eta = 1.f;   ///< η_t / η_i of a refraction (1 for reflection): lets Russian roulette undo the 1/η² radiance scaling
 };
 
-/// Sets `p.type` from the factors (metallic, alpha, transmission, specular) of a surface point:
-/// called by the scene loader for each material and again after textures change the factors.
+/// GGX α below which a microfacet lobe is treated as its smooth limit, a delta lobe (mirror
+/// reflection, refraction). Rough lobes are evaluated with α ≥ kMinAlpha.
+inline constexpr float kMinAlpha = 1e-3f;
+
+/// Sets `p.type` from the factors (metallic, alpha, transmission, specular, ior, thinWalled) of a
+/// surface point: called by the scene loader for each material and again after textures change the
+/// factors. The single-lobe types are the exact special cases of the glTF model (MaterialType::Pbr)
+/// and keep their own, cheaper code:
+///  * Diffuse: metallic 0, transmission 0, specular 0 (KHR_materials_specular's pure Lambertian);
+///  * Mirror / RoughConductor: metallic 1 (α < kMinAlpha / α ≥ kMinAlpha);
+///  * Dielectric: smooth glass, a closed volume (not thin-walled), metallic 0, transmission 1,
+///    specular 1, specularColor 1;
+///  * Pbr: everything else (materials/gltf_pbr.h).
 void finalizeBsdfParams(BsdfParams& p);
 
-/// True when the material scatters only into discrete directions (eval and pdf are zero everywhere).
-inline bool isDeltaMaterial(const BsdfParams& m) {
-    return m.type == MaterialType::Mirror || m.type == MaterialType::Dielectric;
-}
+/// True when every lobe of the material is a delta lobe (eval and pdf are zero everywhere): light
+/// sampling is pointless there. A material that mixes a delta lobe with a non-delta one (smooth
+/// plastic: delta coat over a diffuse base) is not delta; its samples say which lobe they took
+/// (BsdfSample::isDelta), and eval/pdf cover the non-delta lobes only.
+bool isDeltaMaterial(const BsdfParams& m);
 
-/// f(wo, wi) without the cosine factor.
+/// f(wo, wi) without the cosine factor, non-delta lobes only. For refraction `mode` chooses between
+/// the BSDF (radiance: the 1/η² compression) and its adjoint (importance), Veach 1997, §5.2.
 Rgb evalBsdf(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal, TransportMode mode);
-/// Solid-angle density with which sampleBsdf generates wi given wo.
+/// Solid-angle density with which sampleBsdf generates wi given wo through its non-delta lobes (the
+/// lobe-selection probabilities included).
 float pdfBsdfW(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal);
+/// evalBsdf and pdfBsdfW together (one evaluation of the lobes for the glTF model).
+Rgb evalBsdfWithPdf(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLocal, TransportMode mode, float& pdfW);
 /// Samples wi given wo; `uLobe` picks reflection/refraction, `u` the direction. False when no
 /// direction is produced (e.g. wo grazing).
 bool sampleBsdf(const BsdfParams& m, const Vec3f& woLocal, float uLobe, Vec2f u, TransportMode mode, BsdfSample& out);

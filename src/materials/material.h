@@ -11,7 +11,9 @@
 
 namespace tessera {
 
-enum class MaterialType { Diffuse, Mirror, Dielectric, RoughConductor };
+/// Diffuse, Mirror, Dielectric and RoughConductor are the single-lobe special cases of Pbr, the
+/// glTF 2.0 metallic-roughness material (materials/bsdf.h, finalizeBsdfParams).
+enum class MaterialType { Diffuse, Mirror, Dielectric, RoughConductor, Pbr };
 
 /// The BSDF inputs at one surface point: the material's factors, multiplied by its textures there.
 /// Small and copied by value into SurfaceBsdf.
@@ -26,6 +28,9 @@ struct BsdfParams {
     float transmission = 0.f;  ///< KHR_materials_transmission transmissionFactor (× texture R)
     bool thinWalled = true;    ///< KHR_materials_volume absent or thicknessFactor 0
     Rgb attenuationCoeff{0.f}; ///< Beer–Lambert σa per scene unit inside a volume (KHR_materials_volume)
+    /// Derived by finalizeBsdfParams (MaterialType::Pbr): the cosine-weighted hemispherical average
+    /// of the dielectric coat's reflectance, which normalizes the diffuse base's coupling.
+    float coatFresnelAvg = 0.f;
 };
 
 enum class AlphaMode : uint8_t { Opaque, Mask, Blend };

@@ -19,8 +19,8 @@ float SurfaceBsdf::shadingCorrection(const Vec3f& wo, const Vec3f& wi, Transport
 
 Rgb SurfaceBsdf::eval(const Vec3f& wo, const Vec3f& wi, TransportMode mode) const {
     if (isDelta() || !sidesAgree(wo, wi)) return Rgb(0.f);
-    // Lambert and GGX (the non-delta BSDFs) are symmetric in their arguments, so f(wi→wo) = f(wo→wi)
-    // and only the shading correction differs between the two transport modes.
+    // Reflection lobes are symmetric in their arguments; refraction is not, and evalBsdf returns
+    // the adjoint for importance itself (the η² rule). The shading correction comes on top.
     Rgb f = evalBsdf(mat_, frame_.toLocal(wo), frame_.toLocal(wi), mode);
     return f * shadingCorrection(wo, wi, mode);
 }
@@ -34,8 +34,7 @@ Rgb SurfaceBsdf::evalWithPdf(const Vec3f& wo, const Vec3f& wi, TransportMode mod
     pdfFwdW = 0.f;
     if (isDelta() || !sidesAgree(wo, wi)) return Rgb(0.f);
     Vec3f woL = frame_.toLocal(wo), wiL = frame_.toLocal(wi);
-    pdfFwdW = pdfBsdfW(mat_, woL, wiL);
-    return evalBsdf(mat_, woL, wiL, mode) * shadingCorrection(wo, wi, mode);
+    return evalBsdfWithPdf(mat_, woL, wiL, mode, pdfFwdW) * shadingCorrection(wo, wi, mode);
 }
 
 bool SurfaceBsdf::sample(const Vec3f& wo, float uLobe, Vec2f u, TransportMode mode, SurfaceBsdfSample& out) const {

@@ -29,13 +29,15 @@ class SurfaceBsdf {
 public:
     SurfaceBsdf(const BsdfParams& params, const Vec3f& ns, const Vec3f& ng) : mat_(params), frame_(ns), ng_(ng) {}
 
+    /// True when every lobe is delta (no light sampling here); a mixed material (smooth coat over a
+    /// diffuse base) is not, and each sample says whether it took a delta lobe (isDelta).
     bool isDelta() const { return isDeltaMaterial(mat_); }
     const Vec3f& ns() const { return frame_.n; }
 
     /// f(wo, wi) for radiance; the adjoint f*(wo, wi) with the shading-normal correction for
-    /// importance. Zero for delta materials and for shading/geometric side mismatches.
+    /// importance. Non-delta lobes only; zero for shading/geometric side mismatches.
     Rgb eval(const Vec3f& woWorld, const Vec3f& wiWorld, TransportMode mode) const;
-    /// Solid-angle density of sampling wi given wo (0 for delta materials).
+    /// Solid-angle density of sampling wi given wo through the non-delta lobes (0 for delta materials).
     float pdfFwdW(const Vec3f& woWorld, const Vec3f& wiWorld) const;
     /// eval and pdfFwdW together, with one change of frame and one side test: what light sampling
     /// needs to weight its sample against BSDF sampling.

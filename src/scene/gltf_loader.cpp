@@ -10,6 +10,8 @@
 
 #include "core/error.h"
 #include "materials/bsdf.h"
+#include "scene/gltf_asset.h"
+#include "scene/gltf_extensions.h"
 #include "scene/mesh_loader.h"
 
 namespace tessera {
@@ -87,22 +89,70 @@ bool fsWriteWholeFile(std::string* err, const std::string&, const std::vector<un
 
 std::string idx(const char* array, size_t i) { return std::string(array) + "[" + std::to_string(i) + "]"; }
 
+/// Component types of vertex attributes: FLOAT and those KHR_mesh_quantization adds.
+constexpr std::initializer_list<int> kFloatOrQuantized = {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE,
+                                                          TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_SHORT,
+                                                          TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT};
+
+/// One integer accessor component (unaligned bytes, little endian) as a float. Normalized integers
+/// map as glTF 2.0 §3.11 defines: f = max(c / 127, −1), c / 255, max(c / 32767, −1), c / 65535.
+float componentAsFloat(const unsigned char* p, int componentType, bool normalized) {
+    switch (componentType) {
+        case TINYGLTF_COMPONENT_TYPE_BYTE: {
+            auto c = float(int8_t(p[0]));
+            return normalized ? std::max(c / 127.f, -1.f) : c;
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? float(p[0]) / 255.f : float(p[0]);
+        case TINYGLTF_COMPONENT_TYPE_SHORT: {
+            int16_t c;
+            std::memcpy(&c, p, 2);
+            return normalized ? std::max(float(c) / 32767.f, -1.f) : float(c);
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+            uint16_t c;
+            std::memcpy(&c, p, 2);
+            return normalized ? float(c) / 65535.f : float(c);
+        }
+        default: {
+            float f;
+            std::memcpy(&f, p, 4);
+            return f;
+        }
+    }
+}
+
+/// How deep TESSERA_asset_gltf assets may name further assets (a cycle of assets stops here).
+constexpr int kMaxAssetNesting = 8;
+
 class Loader {
 public:
-    Loader(std::string path, std::vector<std::string>& warnings, const SceneLoadOptions& options)
-        : path_(std::move(path)), warnings_(warnings), options_(options) {}
+    /// `root` places the file's scene (identity for a scene; the naming node's world transform for
+    /// a TESSERA_asset_gltf asset, which `nesting` counts); `assetBytes` is the scene's running total
+    /// of asset bytes read (null: this loader keeps its own).
+    Loader(std::string path, std::vector<std::string>& warnings, const SceneLoadOptions& options, const Mat4d& root = Mat4d(1.0),
+           int nesting = 0, uint64_t* assetBytes = nullptr)
+        : path_(std::move(path)), warnings_(warnings), options_(options), root_(root), nesting_(nesting),
+          assetBytes_(assetBytes ? assetBytes : &ownAssetBytes_) {}
 
     Scene load() {
+        Scene scene = loadUnfinalized();
+        scene.finalize();
+        return scene;
+    }
+
+    /// The scene before Scene::finalize: what TESSERA_asset_gltf merges into the scene naming it.
+    /// An asset's TESSERA_render settings are not read.
+    Scene loadUnfinalized() {
         readModel();
         checkRequiredExtensions();
+        warnUnsupportedExtensions();
         scene_.sourcePath = path_;
-        readRenderSettings();
+        if (nesting_ == 0) readRenderSettings();
         readMaterials();
         traverseScene();
         if (droppedTriangles_ > 0)
             warnings_.push_back(path_ + ": dropped " + std::to_string(droppedTriangles_) +
                                 " degenerate or non-finite triangle(s)");
-        scene_.finalize();
         return std::move(scene_);
     }
 
@@ -142,8 +192,45 @@ private:
     void checkRequiredExtensions() const {
         std::vector<std::string> known = supportedGltfExtensions();
         for (const std::string& e : model_.extensionsRequired)
-            if (std::find(known.begin(), known.end(), e) == known.end())
-                fail("extensionsRequired", "unsupported required extension '" + e + "'");
+            if (std::find(known.begin(), known.end(), e) == known.end()) {
+                std::string what = unsupportedExtensionEffect(e).required;
+                fail("extensionsRequired", "unsupported required extension '" + e + "'" + (what.empty() ? "" : ": " + what));
+            }
+    }
+
+    /// One warning line per extension of extensionsUsed that Tessera does not implement, saying what
+    /// is ignored; then the ignored core features (one line each). A file that is not renderable
+    /// without an unsupported extension names it in extensionsRequired (an error, above); the
+    /// exception is a primitive that exists only in Draco-compressed form, refused here.
+    void warnUnsupportedExtensions() const {
+        std::vector<std::string> known = supportedGltfExtensions();
+        for (const std::string& e : model_.extensionsUsed) {
+            if (std::find(known.begin(), known.end(), e) != known.end()) continue;
+            if (std::find(model_.extensionsRequired.begin(), model_.extensionsRequired.end(), e) != model_.extensionsRequired.end())
+                continue;
+            warnings_.push_back(path_ + ": extensionsUsed: '" + e + "' is not supported: " + unsupportedExtensionEffect(e).ignored);
+        }
+        bool colors = false, morphs = false;
+        for (size_t m = 0; m < model_.meshes.size(); ++m)
+            for (size_t p = 0; p < model_.meshes[m].primitives.size(); ++p) {
+                const gl::Primitive& prim = model_.meshes[m].primitives[p];
+                colors = colors || prim.attributes.count("COLOR_0") > 0;
+                morphs = morphs || !prim.targets.empty();
+                auto draco = prim.extensions.find("KHR_draco_mesh_compression");
+                auto pos = prim.attributes.find("POSITION");
+                if (draco != prim.extensions.end() && pos != prim.attributes.end() && pos->second >= 0 &&
+                    size_t(pos->second) < model_.accessors.size() && model_.accessors[size_t(pos->second)].bufferView < 0)
+                    fail(idx("meshes", m) + "." + idx("primitives", p),
+                         "exists only Draco-compressed (KHR_draco_mesh_compression is not supported): " +
+                             unsupportedExtensionEffect("KHR_draco_mesh_compression").required);
+            }
+        auto ignored = [&](bool present, const std::string& what) {
+            if (present) warnings_.push_back(path_ + ": " + what);
+        };
+        ignored(colors, "vertex colours (COLOR_0) are ignored: base colour comes from the material alone");
+        ignored(morphs, "morph targets are ignored: meshes are rendered in their base shape");
+        ignored(!model_.skins.empty(), "skins are ignored: skinned meshes are rendered in their bind pose");
+        ignored(!model_.animations.empty(), "animations are ignored: nodes are rendered in their static transforms");
     }
 
     /// An optional RGB array member with components in [0, maxComponent].
@@ -270,6 +357,8 @@ private:
         Material def;
         def.name = "default";
         def.bsdf.baseColor = Rgb(0.8f);
+        def.bsdf.specular = 0.f;  // Lambertian: no dielectric coat (KHR_materials_specular's specularFactor 0)
+        finalizeBsdfParams(def.bsdf);
         scene_.materials.push_back(def);
     }
 
@@ -318,7 +407,7 @@ private:
             for (size_t i = 0; i < model_.nodes.size(); ++i)
                 if (!isChild[i]) roots.push_back(int(i));
         }
-        for (int r : roots) visitNode(r, Mat4d(1.0), 0);
+        for (int r : roots) visitNode(r, root_, 0);
     }
 
     void visitNode(int index, const Mat4d& parent, int depth) {
@@ -338,6 +427,8 @@ private:
             readSphere(it->second, world, el + ".extensions.TESSERA_sphere");
         if (auto it = node.extensions.find("TESSERA_asset_mesh"); it != node.extensions.end())
             readAssetMesh(it->second, world, el + ".extensions.TESSERA_asset_mesh");
+        if (auto it = node.extensions.find("TESSERA_asset_gltf"); it != node.extensions.end())
+            readAssetGltf(it->second, world, el + ".extensions.TESSERA_asset_gltf");
         for (int c : node.children) visitNode(c, world, depth + 1);
     }
 
@@ -431,8 +522,6 @@ private:
     void readAssetMesh(const gl::Value& v, const Mat4d& world, const std::string& el) {
         if (!v.IsObject() || !v.Has("asset") || !v.Get("asset").IsString()) fail(el, "needs an 'asset' name (string)");
         std::string name = v.Get("asset").Get<std::string>();
-        if (!isValidAssetName(name))
-            fail(el, "asset name '" + name + "' must be a relative path of [A-Za-z0-9._-] components without '..'");
         uint32_t materialId = defaultMaterial_;
         if (v.Has("material")) {
             double mat = number(v, "material", el, -1.0);
@@ -440,16 +529,7 @@ private:
                 fail(el, "'material' must index materials[]");
             materialId = uint32_t(mat);
         }
-        std::optional<std::string> file = resolveAsset(name, options_.assetRoots);
-        if (!file) {
-            std::string roots;
-            for (const std::string& r : options_.assetRoots) roots += (roots.empty() ? "" : ", ") + r;
-            fail(el, "asset '" + name + "' not found in the asset folders (" + (roots.empty() ? "none" : roots) +
-                         "); run tools/fetch_assets.sh or set TESSERA_ASSETS");
-        }
-        std::error_code ec;
-        uint64_t size = std::filesystem::file_size(*file, ec);
-        if (ec || size > options_.maxFileBytes) fail(el, "asset '" + *file + "' is unreadable or over the file-size limit");
+        const std::string file = resolveAssetOrThrow(name, options_.assetRoots, options_.maxFileBytes, *assetBytes_, path_, el);
         std::string lower = name;
         for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
         auto endsWith = [&](const char* suffix) {
@@ -457,8 +537,8 @@ private:
             return lower.size() >= s.size() && lower.compare(lower.size() - s.size(), s.size(), s) == 0;
         };
         TriangleMesh mesh;
-        if (endsWith(".ply") || endsWith(".ply.gz")) mesh = loadPlyMesh(*file);
-        else if (endsWith(".obj")) mesh = loadObjMesh(*file);
+        if (endsWith(".ply") || endsWith(".ply.gz")) mesh = loadPlyMesh(file);
+        else if (endsWith(".obj")) mesh = loadObjMesh(file);
         else fail(el, "asset '" + name + "': only .ply, .ply.gz and .obj meshes are supported");
         mesh.name = name + " (" + el + ")";
         mesh.materialId = materialId;
@@ -475,6 +555,28 @@ private:
         if (kept.empty()) fail(el, "asset '" + name + "' has no usable triangles");
         mesh.triangles = std::move(kept);
         scene_.geometry.meshes.push_back(std::move(mesh));
+    }
+
+    /// TESSERA_asset_gltf {asset}: a glTF/GLB file from the asset folders, loaded by a Loader of its
+    /// own (same options; its URIs confined to its folder) whose root transform is this node's, and
+    /// merged (scene/gltf_asset.h). Its errors are reported as this element's, with the asset's own
+    /// "FILE: ELEMENT: PROBLEM" after it.
+    void readAssetGltf(const gl::Value& v, const Mat4d& world, const std::string& el) {
+        if (!v.IsObject() || !v.Has("asset") || !v.Get("asset").IsString()) fail(el, "needs an 'asset' name (string)");
+        const std::string name = v.Get("asset").Get<std::string>();
+        const std::string file = resolveAssetOrThrow(name, options_.assetRoots, options_.maxFileBytes, *assetBytes_, path_, el);
+        std::string lower = name;
+        for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+        if (!lower.ends_with(".glb") && !lower.ends_with(".gltf")) fail(el, "asset '" + name + "': only .glb and .gltf files are supported");
+        if (nesting_ >= kMaxAssetNesting)
+            fail(el, "assets nested deeper than " + std::to_string(kMaxAssetNesting) + " (does an asset name itself?)");
+        Scene asset;
+        try {
+            asset = Loader(file, warnings_, options_, world, nesting_ + 1, assetBytes_).loadUnfinalized();
+        } catch (const SceneError& e) {
+            fail(el, "asset '" + name + "': " + e.what());
+        }
+        appendAssetScene(scene_, std::move(asset));
     }
 
     /// Byte view of accessor `a` after checking type, bounds and layout.
@@ -512,10 +614,21 @@ private:
         return View{buf.data.data() + bv.byteOffset + a.byteOffset, stride, a.count};
     }
 
+    /// A VEC3 attribute (POSITION, NORMAL) as floats: FLOAT, or the integer types KHR_mesh_quantization
+    /// allows (BYTE, UNSIGNED_BYTE, SHORT, UNSIGNED_SHORT, normalized or not), whose scale and offset
+    /// the node transforms carry.
     std::vector<Vec3f> readVec3(int accessor, const std::string& el) const {
-        View v = accessorView(accessor, el, TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT});
+        View v = accessorView(accessor, el, TINYGLTF_TYPE_VEC3, kFloatOrQuantized);
+        const gl::Accessor& a = model_.accessors[size_t(accessor)];
         std::vector<Vec3f> out(v.count);
-        for (size_t i = 0; i < v.count; ++i) std::memcpy(&out[i], v.data + i * v.stride, sizeof(Vec3f));
+        if (a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT) {
+            for (size_t i = 0; i < v.count; ++i) std::memcpy(&out[i], v.data + i * v.stride, sizeof(Vec3f));
+            return out;
+        }
+        const size_t size = size_t(gl::GetComponentSizeInBytes(uint32_t(a.componentType)));
+        for (size_t i = 0; i < v.count; ++i)
+            for (int c = 0; c < 3; ++c)
+                out[i][c] = componentAsFloat(v.data + i * v.stride + size_t(c) * size, a.componentType, a.normalized);
         return out;
     }
 
@@ -612,6 +725,10 @@ private:
     std::string path_;
     std::vector<std::string>& warnings_;
     SceneLoadOptions options_;
+    Mat4d root_;
+    int nesting_ = 0;
+    uint64_t ownAssetBytes_ = 0;
+    uint64_t* assetBytes_;  ///< bytes of asset files read by the whole scene load (nested loaders share it)
     gl::Model model_;
     Scene scene_;
     uint32_t defaultMaterial_ = 0;
@@ -634,7 +751,8 @@ private:
 std::vector<std::string> supportedGltfExtensions() {
     return {"KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior",
             "KHR_materials_specular", "KHR_materials_volume",
-            "TESSERA_render", "TESSERA_sphere", "TESSERA_thin_lens", "TESSERA_asset_mesh"};
+            "KHR_mesh_quantization",
+            "TESSERA_render", "TESSERA_sphere", "TESSERA_thin_lens", "TESSERA_asset_mesh", "TESSERA_asset_gltf"};
 }
 
 Scene loadGltfScene(const std::string& path, std::vector<std::string>& warnings) {

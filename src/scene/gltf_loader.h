@@ -6,6 +6,11 @@
 ///   TESSERA_thin_lens (camera): {apertureRadius, focusDistance}
 ///   TESSERA_asset_mesh (node): {asset, material}: a PLY (.gz too) or OBJ mesh that is not committed,
 ///     named relative to the asset folders (scene/assets.h), placed by the node's transform
+///   TESSERA_asset_gltf (node): {asset}: a glTF/GLB file from the asset folders (its meshes, materials,
+///     textures, lights and node hierarchy) placed under the node's transform (scene/gltf_asset.h)
+/// KHR_mesh_quantization: integer POSITION/NORMAL components (normalized or not) are read as floats.
+/// An extension the file requires but Tessera lacks is an error; one it only uses gives one warning
+/// line saying what is ignored (as do vertex colours, morph targets, skins and animations).
 /// Material mapping (model no more than the scenes need): KHR_materials_transmission > 0 → smooth
 /// dielectric (KHR_materials_ior, default 1.5); metallicFactor ≥ 0.5 → mirror (roughness 0) or GGX
 /// conductor (α = roughness²) with F0 = baseColor; otherwise Lambertian with albedo = baseColor.
@@ -25,8 +30,11 @@ struct SceneLoadOptions {
     /// symlinks pointing out). Off by default: a scene file must not read arbitrary files.
     bool allowExternalFiles = false;
     /// Largest file (scene or buffer) read, in bytes. data: URIs are bounded by the scene file's size.
+    /// The asset files a scene names (TESSERA_asset_mesh, TESSERA_asset_gltf) count together, every
+    /// reference again.
     uint64_t maxFileBytes = uint64_t(4) << 30;
-    /// Folders where TESSERA_asset_mesh names are looked up (never the scene's own URIs).
+    /// Folders where TESSERA_asset_mesh and TESSERA_asset_gltf names are looked up (never the scene's
+    /// own URIs).
     std::vector<std::string> assetRoots = defaultAssetRoots();
 };
 
