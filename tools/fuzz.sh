@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets for the scene loaders with clang + ASan/UBSan and runs them.
 #   tools/fuzz.sh [SECONDS] [gltf|mesh|all]      (default 300 s per target, all)
-# Seed corpora: gltf: the shipped scenes and tests/corpus/malformed; mesh: tests/corpus/malformed-mesh,
+# Seed corpora: gltf: the shipped scenes, tests/corpus/malformed and tests/fuzz/seeds (textured GLB and data-URI scenes); mesh: tests/corpus/malformed-mesh,
 # a valid quad in PLY (ASCII, binary) and OBJ, and the smallest Stanford bunny when TESSERA_ASSETS
 # (default ../shared/data) has it. New crashes are written to build-fuzz/crashes-TARGET/; add each
 # one to tests/corpus/malformed or tests/corpus/malformed-mesh once fixed.
@@ -22,7 +22,7 @@ done
 
 # Seeds.
 mkdir -p "$build/corpus-gltf" "$build/corpus-mesh"
-cp "$root"/scenes/*/*.gltf "$root"/tests/corpus/malformed/*.gltf "$build/corpus-gltf/" 2>/dev/null || true
+cp "$root"/scenes/*/*.gltf "$root"/tests/corpus/malformed/*.gl[tb]* "$root"/tests/fuzz/seeds/*.gl[tb]* "$build/corpus-gltf/" 2>/dev/null || true
 cp "$root"/tests/corpus/malformed-mesh/* "$build/corpus-mesh/"
 printf 'ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n' \
   > "$build/corpus-mesh/quad-ascii.ply"

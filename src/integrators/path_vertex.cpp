@@ -104,7 +104,7 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         v.ns = si.ns;
         v.woWorld = -glm::normalize(ray.d);
         v.beta = beta;
-        v.bsdf = scene.bsdfParams(si);
+        v.bsdf = scene.bsdfParams(si, ctx.camera.pixelFootprint(si.p));
         v.lightIndex = si.lightIndex;
         // Densities are evaluated from the vertex positions rather than taken from the sampling
         // routine: the connection code evaluates them the same way, so every strategy sees exactly

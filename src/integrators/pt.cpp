@@ -30,7 +30,7 @@ Rgb PtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler&
         }
         if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;
 
-        SurfaceBsdf bsdf(scene.bsdfParams(si), si.ns, si.ng);
+        SurfaceBsdf bsdf(scene.bsdfParams(si, ctx.camera.pixelFootprint(si.p)), si.ns, si.ng);
         SurfaceBsdfSample bs;
         float uLobe = sampler.get1D();
         Vec2f uDir = sampler.get2D();

@@ -104,7 +104,7 @@ Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampl
         if (si.lightIndex != kInvalidId) addEmission(ctx, si, wo, beta, deltaBounce, prevPdfW, prevP, L);
         if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;
 
-        SurfaceBsdf bsdf(scene.bsdfParams(si), si.ns, si.ng);
+        SurfaceBsdf bsdf(scene.bsdfParams(si, ctx.camera.pixelFootprint(si.p)), si.ns, si.ng);
         if (!bsdf.isDelta()) addLightSample(ctx, si, bsdf, wo, beta, sampler, L);
 
         // Continue the path by BSDF sampling.

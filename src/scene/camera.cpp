@@ -29,6 +29,7 @@ Camera::Camera(const CameraDesc& desc, int width, int height) : desc_(desc), wid
     };
     Vec3d lo = corner(-1.0, -1.0), hi = corner(1.0, 1.0);
     imagePlaneArea_ = float(std::abs(glm::dot(hi - lo, Vec3d(right_))) * std::abs(glm::dot(hi - lo, Vec3d(up_))));
+    pixelSpreadAngle_ = float(std::abs(glm::dot(hi - lo, Vec3d(up_))) / double(height));
 }
 
 float Camera::importance(const Vec3f& pLens, const Vec3f& dir, Vec2f* raster) const {

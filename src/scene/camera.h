@@ -52,6 +52,12 @@ public:
     bool isPinhole() const { return !(desc_.apertureRadius > 0.f); }
     float lensArea() const { return isPinhole() ? 1.f : kPi * desc_.apertureRadius * desc_.apertureRadius; }
 
+    /// Width in world units that one pixel subtends at distance |p − eye| from the camera: the
+    /// texture footprint at p (pbrt-v4's Camera::Approximate_dp_dxy, isotropic and without the
+    /// surface's tilt). A function of p alone, so every integrator, every bounce and every thread
+    /// count sees the same MIP level at the same point.
+    float pixelFootprint(const Vec3f& p) const { return glm::length(p - eye_) * pixelSpreadAngle_; }
+
     Vec3f position() const { return eye_; }
     Vec3f forward() const { return forward_; }
     int width() const { return width_; }
@@ -65,6 +71,7 @@ private:
     Mat4d viewProj_, invViewProj_;
     Vec3f eye_, forward_, right_, up_;
     float imagePlaneArea_ = 0.f;  ///< area of the image rectangle at distance 1 in front of the eye
+    float pixelSpreadAngle_ = 0.f;  ///< image-plane height at distance 1 over the pixel rows (radians, small-angle)
 };
 
 }  // namespace tessera

@@ -12,80 +12,15 @@
 #include "materials/bsdf.h"
 #include "scene/gltf_asset.h"
 #include "scene/gltf_extensions.h"
+#include "scene/gltf_files.h"
+#include "scene/gltf_textures.h"
 #include "scene/mesh_loader.h"
+#include "scene/tangents.h"
 
 namespace tessera {
 namespace {
 
 namespace gl = tinygltf;
-
-/// Image decoding is not needed (Tessera has no textures yet): accept the bytes without decoding,
-/// which also keeps image decoders away from untrusted files.
-bool skipImage(gl::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
-    return true;
-}
-
-/// File access for tinygltf, confined to the scene's folder. Replaces tinygltf's defaults, whose
-/// path expansion runs wordexp(3) on URIs taken from the file (shell-style expansion of untrusted
-/// text) and which read any path a URI names.
-struct FileAccess {
-    std::filesystem::path root;  ///< canonical folder of the scene file
-    SceneLoadOptions options;
-    std::string violation;       ///< first refused path, reported as the error's cause
-
-    bool allowed(const std::string& path) {
-        std::error_code ec;
-        std::filesystem::path canonical = std::filesystem::weakly_canonical(path, ec);
-        if (ec) return false;
-        if (options.allowExternalFiles) return true;
-        auto rel = canonical.lexically_relative(root);
-        bool inside = !rel.empty() && rel.native().rfind("..", 0) != 0 && !rel.is_absolute();
-        if (!inside && violation.empty())
-            violation = "'" + path + "' lies outside the scene's folder (pass --allow-external-files to permit it)";
-        return inside;
-    }
-};
-
-bool fsFileExists(const std::string& path, void*) {
-    // Existence is not access: the read below refuses files outside the folder and says why.
-    std::error_code ec;
-    return std::filesystem::is_regular_file(path, ec);
-}
-
-std::string fsExpandFilePath(const std::string& path, void*) { return path; }
-
-bool fsReadWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
-    auto* fa = static_cast<FileAccess*>(user);
-    if (!fa->allowed(path)) {
-        if (err) *err += "refused to read " + path + "\n";
-        return false;
-    }
-    std::error_code ec;
-    uint64_t size = std::filesystem::file_size(path, ec);
-    if (ec) {
-        if (err) *err += "cannot read " + path + "\n";
-        return false;
-    }
-    if (size > fa->options.maxFileBytes) {
-        if (fa->violation.empty())
-            fa->violation = "'" + path + "' is " + std::to_string(size) + " bytes, over the limit of " +
-                            std::to_string(fa->options.maxFileBytes);
-        if (err) *err += "file too large: " + path + "\n";
-        return false;
-    }
-    std::ifstream in(path, std::ios::binary);
-    out->resize(size_t(size));
-    if (size > 0 && !in.read(reinterpret_cast<char*>(out->data()), std::streamsize(size))) {
-        if (err) *err += "cannot read " + path + "\n";
-        return false;
-    }
-    return true;
-}
-
-bool fsWriteWholeFile(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
-    if (err) *err += "writing is not allowed while loading\n";
-    return false;
-}
 
 std::string idx(const char* array, size_t i) { return std::string(array) + "[" + std::to_string(i) + "]"; }
 
@@ -165,11 +100,11 @@ private:
         std::error_code ec;
         if (!std::filesystem::is_regular_file(path_, ec)) fail("", "no such file");
         gl::TinyGLTF loader;
-        loader.SetImageLoader(skipImage, nullptr);
-        FileAccess access;
-        access.root = std::filesystem::weakly_canonical(std::filesystem::absolute(path_), ec).parent_path();
-        access.options = options_;
-        loader.SetFsCallbacks(gl::FsCallbacks{fsFileExists, fsExpandFilePath, fsReadWholeFile, fsWriteWholeFile, &access});
+        // tinygltf's decoders never see an image: the callback keeps the bytes for decodeImage.
+        loader.SetImageLoader(storeImageBytes, nullptr);
+        access_.root = std::filesystem::weakly_canonical(std::filesystem::absolute(path_), ec).parent_path();
+        access_.options = options_;
+        loader.SetFsCallbacks(access_.callbacks());
         // The scene file itself is always readable, wherever it is; only what it references is confined.
         uint64_t sceneBytes = std::filesystem::file_size(path_, ec);
         if (!ec && sceneBytes > options_.maxFileBytes)
@@ -180,7 +115,7 @@ private:
         bool ok = ext == ".glb" ? loader.LoadBinaryFromFile(&model_, &err, &warn, path_)
                                 : loader.LoadASCIIFromFile(&model_, &err, &warn, path_);
         if (!ok || !err.empty()) {
-            if (!access.violation.empty()) fail("buffers", access.violation);
+            if (!access_.violation.empty()) fail("buffers", access_.violation);
             std::string msg = err.empty() ? "cannot parse the file" : err;
             while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
             for (char& c : msg)
@@ -290,6 +225,10 @@ private:
     }
 
     void readMaterials() {
+        // Decoded images together stay under --max-memory (which sets maxFileBytes).
+        GltfTextureReader textures(model_, path_, scene_.images, warnings_,
+                                   [this](const std::string& p) { return access_.whyRefused(p); },
+                                   options_.maxFileBytes);
         for (size_t i = 0; i < model_.materials.size(); ++i) {
             const gl::Material& gm = model_.materials[i];
             const std::string el = idx("materials", i);
@@ -349,6 +288,8 @@ private:
                 }
             }
             m.doubleSided = gm.doubleSided;
+            textures.readMaterial(gm, m, el);
+            alphaMasks_.push_back(GltfTextureReader::alphaMaskOf(m));
             scene_.materials.push_back(m);
         }
         // Primitives without a material get glTF's "default material" (baseColor 1, metallic 1)
@@ -360,6 +301,7 @@ private:
         def.bsdf.specular = 0.f;  // Lambertian: no dielectric coat (KHR_materials_specular's specularFactor 0)
         finalizeBsdfParams(def.bsdf);
         scene_.materials.push_back(def);
+        alphaMasks_.push_back(nullptr);
     }
 
     Mat4d localTransform(const gl::Node& node, const std::string& el) const {
@@ -684,9 +626,12 @@ private:
             for (uint32_t i : indices)
                 if (i >= mesh.positions.size())
                     fail(el, "index " + std::to_string(i) + " out of range (" + std::to_string(mesh.positions.size()) + " vertices)");
-            std::vector<glm::uvec3> tris = assembleTriangles(indices, mode, el);
             if (prim.material >= 0 && size_t(prim.material) >= model_.materials.size()) fail(el, "material index out of range");
             mesh.materialId = prim.material >= 0 ? uint32_t(prim.material) : defaultMaterial_;
+            mesh.triangles = assembleTriangles(indices, mode, el);
+            readTextureAttributes(prim, mesh, el);
+            std::vector<glm::uvec3> tris = std::move(mesh.triangles);
+            mesh.triangles.clear();
 
             for (Vec3f& v : mesh.positions) v = Vec3f(world * glm::dvec4(Vec3d(v), 1.0));
             for (Vec3f& n : mesh.normals) {
@@ -694,6 +639,14 @@ private:
                 float len = glm::length(t);
                 n = len > 0.f && std::isfinite(len) ? t / len : Vec3f(0.f);
             }
+            // Tangents lie in the surface: they transform like positions (without translation), and
+            // a mirroring transform flips the bitangent sign (B = w · N × T with N, T both mapped).
+            for (Vec4f& t : mesh.tangents) {
+                Vec3f d = Vec3f(world * glm::dvec4(Vec3d(Vec3f(t)), 0.0));
+                float len = glm::length(d);
+                t = Vec4f(len > 0.f && std::isfinite(len) ? d / len : Vec3f(0.f), flipWinding ? -t.w : t.w);
+            }
+            mesh.alphaMask = alphaMasks_[mesh.materialId];
             mesh.triangles.reserve(tris.size());
             for (glm::uvec3 t : tris) {
                 if (flipWinding) std::swap(t.y, t.z);
@@ -706,6 +659,54 @@ private:
             }
             scene_.geometry.meshes.push_back(std::move(mesh));
         }
+    }
+
+    /// TEXCOORD_0/_1 and TANGENT (object space), checked against what the material samples;
+    /// MikkTSpace tangents when a normal texture has none from the file (glTF 2.0, 3.7.2.1).
+    void readTextureAttributes(const gl::Primitive& prim, TriangleMesh& mesh, const std::string& el) {
+        const size_t n = mesh.positions.size();
+        for (int set = 0; set < 2; ++set) {
+            const std::string name = "TEXCOORD_" + std::to_string(set);
+            auto it = prim.attributes.find(name);
+            if (it == prim.attributes.end()) continue;
+            std::vector<float> f = readFloats(it->second, el + ".attributes." + name, TINYGLTF_TYPE_VEC2, 2);
+            if (f.size() != 2 * n) fail(el, name + " and POSITION counts differ");
+            mesh.texcoords[set].resize(n);
+            for (size_t i = 0; i < n; ++i) mesh.texcoords[set][i] = Vec2f(f[2 * i], f[2 * i + 1]);
+        }
+        const Material& m = scene_.materials[mesh.materialId];
+        const MaterialTextures& t = m.textures;
+        for (const TextureRef* ref : {&t.baseColor, &t.metallicRoughness, &t.normal, &t.emissive, &t.transmission, &t.specular, &t.specularColor})
+            if (ref->valid() && !mesh.hasTexcoords(ref->texCoord))
+                fail(el, "material '" + m.name + "' samples TEXCOORD_" + std::to_string(ref->texCoord) + ", which the primitive lacks");
+        if (!t.normal.valid()) return;  // tangents only serve normal mapping
+        auto it = prim.attributes.find("TANGENT");
+        // Without NORMAL the surface is flat shaded and a file's tangents are ignored (3.7.2.1).
+        if (it != prim.attributes.end() && !mesh.normals.empty()) {
+            std::vector<float> f = readFloats(it->second, el + ".attributes.TANGENT", TINYGLTF_TYPE_VEC4, 4);
+            if (f.size() != 4 * n) fail(el, "TANGENT and POSITION counts differ");
+            mesh.tangents.resize(n);
+            for (size_t i = 0; i < n; ++i) mesh.tangents[i] = Vec4f(f[4 * i], f[4 * i + 1], f[4 * i + 2], f[4 * i + 3] < 0.f ? -1.f : 1.f);
+            return;
+        }
+        if (mesh.normals.empty()) unweldWithFlatNormals(mesh);
+        generateMikkTangents(mesh, t.normal.texCoord);
+    }
+
+    /// Components of an attribute as floats: FLOAT, or the integer types normalized to [0, 1] /
+    /// [−1, 1] as glTF 2.0 (3.11) defines, or taken as integers when not normalized
+    /// (KHR_mesh_quantization), through componentAsFloat.
+    std::vector<float> readFloats(int accessor, const std::string& el, int type, int components) const {
+        View v = accessorView(accessor, el, type, kFloatOrQuantized);
+        const gl::Accessor& a = model_.accessors[size_t(accessor)];
+        const size_t size = size_t(gl::GetComponentSizeInBytes(uint32_t(a.componentType)));
+        std::vector<float> out(v.count * size_t(components));
+        for (size_t i = 0; i < v.count; ++i)
+            for (int c = 0; c < components; ++c) {
+                float f = componentAsFloat(v.data + i * v.stride + size_t(c) * size, a.componentType, a.normalized);
+                out[i * size_t(components) + size_t(c)] = std::isfinite(f) ? f : 0.f;  // a NaN uv or tangent must not reach a lookup
+            }
+        return out;
     }
 
     std::vector<glm::uvec3> assembleTriangles(const std::vector<uint32_t>& ix, int mode, const std::string& el) const {
@@ -729,7 +730,9 @@ private:
     int nesting_ = 0;
     uint64_t ownAssetBytes_ = 0;
     uint64_t* assetBytes_;  ///< bytes of asset files read by the whole scene load (nested loaders share it)
+    GltfFileAccess access_;
     gl::Model model_;
+    std::vector<std::shared_ptr<const AlphaMask>> alphaMasks_;  ///< per material (null: opaque)
     Scene scene_;
     uint32_t defaultMaterial_ = 0;
     std::set<int> visited_;
@@ -750,7 +753,7 @@ private:
 
 std::vector<std::string> supportedGltfExtensions() {
     return {"KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior",
-            "KHR_materials_specular", "KHR_materials_volume",
+            "KHR_materials_specular", "KHR_materials_volume", "KHR_texture_transform",
             "KHR_mesh_quantization",
             "TESSERA_render", "TESSERA_sphere", "TESSERA_thin_lens", "TESSERA_asset_mesh", "TESSERA_asset_gltf"};
 }

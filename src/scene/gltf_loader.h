@@ -11,10 +11,15 @@
 /// KHR_mesh_quantization: integer POSITION/NORMAL components (normalized or not) are read as floats.
 /// An extension the file requires but Tessera lacks is an error; one it only uses gives one warning
 /// line saying what is ignored (as do vertex colours, morph targets, skins and animations).
-/// Material mapping (model no more than the scenes need): KHR_materials_transmission > 0 → smooth
-/// dielectric (KHR_materials_ior, default 1.5); metallicFactor ≥ 0.5 → mirror (roughness 0) or GGX
-/// conductor (α = roughness²) with F0 = baseColor; otherwise Lambertian with albedo = baseColor.
+/// Materials: every glTF factor goes into BsdfParams (finalizeBsdfParams picks the BSDF);
 /// emissiveFactor × KHR_materials_emissive_strength makes every surface of the material a light.
+/// Textures (scene/gltf_textures.h): baseColor, metallicRoughness, normal, emissive, and the
+/// transmission/specular/specularColor textures of their extensions, with samplers,
+/// KHR_texture_transform, TEXCOORD_0/_1; images are decoded once by decodeImage (GLB buffer views,
+/// data URIs, files in the scene's folder), colour slots as sRGB. occlusionTexture is ignored (a
+/// path tracer computes occlusion). alphaMode MASK (and BLEND, as MASK at 0.5 with a warning) gives
+/// the meshes a shared AlphaMask. A normal texture without TANGENT gets MikkTSpace tangents
+/// (scene/tangents.h).
 /// Errors throw SceneError naming the file, the element (e.g. "meshes[3].primitives[0]") and the problem.
 #include <string>
 #include <vector>
@@ -29,9 +34,10 @@ struct SceneLoadOptions {
     /// Allow buffer/image URIs that resolve outside the scene's folder (`..`, absolute paths,
     /// symlinks pointing out). Off by default: a scene file must not read arbitrary files.
     bool allowExternalFiles = false;
-    /// Largest file (scene or buffer) read, in bytes. data: URIs are bounded by the scene file's size.
-    /// The asset files a scene names (TESSERA_asset_mesh, TESSERA_asset_gltf) count together, every
-    /// reference again.
+    /// Largest file (scene, buffer or image) read, in bytes. data: URIs are bounded by the scene
+    /// file's size. The asset files a scene names (TESSERA_asset_mesh, TESSERA_asset_gltf) count
+    /// together, every reference again. Also the most that the decoded images of one file together
+    /// may take (--max-memory sets it).
     uint64_t maxFileBytes = uint64_t(4) << 30;
     /// Folders where TESSERA_asset_mesh and TESSERA_asset_gltf names are looked up (never the scene's
     /// own URIs).

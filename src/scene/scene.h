@@ -61,8 +61,10 @@ public:
     /// (barycentric interpolation / reprojection onto the sphere), which is far more accurate than
     /// o + t·d and is what makes ray spawning with a few ulps of offset safe.
     SurfaceInteraction interaction(const Ray& ray, const Hit& hit) const;
-    /// The BSDF inputs at `si`: its material's factors times its textures there.
-    BsdfParams bsdfParams(const SurfaceInteraction& si) const { return materials[si.materialId].bsdf; }
+    /// The BSDF inputs at `si`: its material's factors times its textures there. `footprintW` is the
+    /// world-space width of the ray footprint at si.p (Camera::pixelFootprint; 0: finest MIP level);
+    /// it is turned into uv units with the triangle's uv density for each texture's TEXCOORD set.
+    BsdfParams bsdfParams(const SurfaceInteraction& si, float footprintW = 0.f) const;
 
 private:
     LightSet lights_;

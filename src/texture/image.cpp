@@ -3,8 +3,11 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <zlib.h>
+
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -22,6 +25,25 @@ const char* sniffFormat(const uint8_t* b, size_t n) {
     if (n >= 4 && b[0] == 0x76 && b[1] == 0x2F && b[2] == 0x31 && b[3] == 0x01) return "exr";
     if (n >= 2 && b[0] == '#' && b[1] == '?') return "hdr";  // "#?RADIANCE" / "#?RGBE"
     return nullptr;
+}
+
+/// Why a PNG's chunk structure is damaged ("" when intact): every chunk complete, its CRC-32 right,
+/// an IEND at the end (PNG specification, 5.3-5.4). OpenImageIO 2.4's PNG reader lets libpng print
+/// "libpng error: ..." on stderr for a damaged file before it reports the error itself, so such
+/// files are refused here, in one message, before libpng sees them; a CRC covers every byte of a
+/// chunk, so any damage to a written file is caught (only a file forged with correct CRCs reaches
+/// libpng's own checks).
+std::string pngDamage(const uint8_t* b, size_t n) {
+    auto be32 = [&](size_t at) { return uint32_t(b[at]) << 24 | uint32_t(b[at + 1]) << 16 | uint32_t(b[at + 2]) << 8 | uint32_t(b[at + 3]); };
+    for (size_t at = 8;;) {
+        if (n - at < 12) return "truncated: the file ends inside a chunk header";
+        uint32_t length = be32(at);
+        if (length > n - at - 12) return "truncated: a chunk runs past the end of the file";
+        uLong crc = crc32(0L, b + at + 4, uInt(length) + 4u);
+        if (uint32_t(crc) != be32(at + 8 + length)) return "corrupt: a chunk's CRC-32 does not match";
+        if (std::memcmp(b + at + 4, "IEND", 4) == 0) return "";
+        at += 12 + size_t(length);
+    }
 }
 
 /// sRGB electro-optical transfer function (IEC 61966-2-1), evaluated in double so that each of the
@@ -83,6 +105,8 @@ Image decodeImage(const std::string& name, const uint8_t* bytes, size_t size, Co
     if (size == 0) fail(name, "image is empty");
     const char* format = sniffFormat(bytes, size);
     if (!format) fail(name, "not a PNG, JPEG, OpenEXR or Radiance HDR image");
+    if (std::strcmp(format, "png") == 0)
+        if (std::string damage = pngDamage(bytes, size); !damage.empty()) fail(name, "cannot decode png image (" + damage + ")");
     OIIO::Filesystem::IOMemReader reader(bytes, size);
     OIIO::ImageSpec config;
     // glTF textures carry straight (unassociated) alpha: keep it, PNG readers would premultiply.
