@@ -3,6 +3,9 @@
 /// The one interface every ray-tracing backend implements (Embree, our BVH with and without spatial
 /// splits, our k-d tree, brute force). Chosen at run time with `--accel NAME`. Integrators only ever
 /// see this interface.
+/// Cut-outs: a hit on a triangle of a mesh with an alpha mask (glTF alphaMode MASK) counts only where
+/// alphaMaskKeeps (geometry/alpha_mask.h) keeps it, for every query, in every backend: a dropped hit
+/// is as if the triangle were not there, so the next one behind it is found.
 #include <memory>
 #include <string>
 #include <string_view>

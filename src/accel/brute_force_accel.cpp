@@ -1,5 +1,6 @@
 #include "accel/brute_force_accel.h"
 
+#include "geometry/alpha_mask.h"
 #include "geometry/intersect.h"
 
 namespace tessera {
@@ -17,6 +18,7 @@ bool BruteForceAccel::intersect(const Ray& rayIn, Hit& hit) const {
             const Vec3f &p0 = mesh.positions[tri.x], &p1 = mesh.positions[tri.y], &p2 = mesh.positions[tri.z];
             TriangleHit th;
             if (!intersectTriangle(ray, p0, p1, p2, th)) continue;
+            if (mesh.alphaMask && !alphaMaskKeeps(mesh, i, th.u, th.v)) continue;  // a cut-out's hole
             ray.tMax = th.t;
             hit.t = th.t;
             hit.u = th.u;
@@ -49,9 +51,11 @@ bool BruteForceAccel::intersect(const Ray& rayIn, Hit& hit) const {
 bool BruteForceAccel::occluded(const Ray& ray) const {
     if (!isTraceableRay(ray)) return false;
     for (const TriangleMesh& mesh : geometry_.meshes) {
-        for (const glm::uvec3& tri : mesh.triangles) {
+        for (uint32_t i = 0; i < mesh.triangles.size(); ++i) {
+            const glm::uvec3& tri = mesh.triangles[i];
             TriangleHit th;
-            if (intersectTriangle(ray, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z], th))
+            if (intersectTriangle(ray, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z], th) &&
+                (!mesh.alphaMask || alphaMaskKeeps(mesh, i, th.u, th.v)))
                 return true;
         }
     }

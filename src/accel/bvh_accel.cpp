@@ -64,6 +64,9 @@ BvhAccel::BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, c
     : geometry_(geometry), config_(config) {
     auto start = std::chrono::steady_clock::now();
     bounds_ = geometry.bounds();
+    // Leaf lanes keep a mesh's alpha-mask flag in geomId's top bit (kMaskedLaneBit).
+    if (geometry.meshes.size() >= size_t(kMaskedLaneBit)) throw std::runtime_error("bvh: more than 2^31 meshes");
+    for (const TriangleMesh& m : geometry.meshes) hasCutOuts_ |= m.alphaMask && !m.triangles.empty();
     // The watertight test may place a hit a few ulps outside the exact triangle (its shear rounds):
     // padded boxes make sure a box face through an edge never hides such a hit.
     GatheredPrimitives gathered = gatherPrimitives(geometry, /*padTriangles=*/true);
@@ -158,7 +161,8 @@ uint32_t BvhAccel::makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf) {
         fillTriangleLanes(geometry_, prims_, order + 4 * b, count, t.p);
         for (uint32_t lane = 0; lane < 4; ++lane) {
             PrimRef ref = lane < count ? prims_[order[4 * b + lane]] : PrimRef{kInvalidId, kInvalidId};
-            t.geomId[lane] = ref.geomId;
+            bool masked = lane < count && geometry_.meshes[ref.geomId].alphaMask;
+            t.geomId[lane] = ref.geomId | (masked ? kMaskedLaneBit : 0u);
             t.primId[lane] = ref.primId;
         }
     }
@@ -283,8 +287,14 @@ std::string BvhAccel::checkInvariants() const {
                 uint32_t first = uint32_t(leafBlocks(ref) - triangles_.data()), blocks = (ref & 3u) + 1;
                 for (uint32_t b = 0; b < blocks; ++b)
                     for (int lane = 0; lane < 4; ++lane)
-                        if (triangles_[first + b].primId[lane] != kInvalidId)
-                            visitPrim({triangles_[first + b].geomId[lane], triangles_[first + b].primId[lane]}, box);
+                        if (triangles_[first + b].primId[lane] != kInvalidId) {
+                            uint32_t geomId = triangles_[first + b].geomId[lane];
+                            bool masked = geomId & kMaskedLaneBit;
+                            geomId &= ~kMaskedLaneBit;
+                            if (geomId < geometry_.meshes.size() && masked != bool(geometry_.meshes[geomId].alphaMask))
+                                return "alpha-mask flag of a leaf lane differs from its mesh";
+                            visitPrim({geomId, triangles_[first + b].primId[lane]}, box);
+                        }
             } else {
                 uint32_t first = (ref & ~(kLeafBit | kMixedBit)) >> 4, count = ref & 15u;
                 for (uint32_t k = 0; k < count; ++k) visitPrim(mixedPrims_[first + k], box);

@@ -13,6 +13,7 @@
 #include "accel/bvh_builder.h"
 #include "accel/kernel_isa.h"
 #include "accel/primitive_refs.h"
+#include "accel/triangle_simd.h"
 #include "core/huge_page_allocator.h"
 
 namespace tessera {
@@ -50,12 +51,16 @@ public:
         uint32_t child[8];
     };
     /// Up to four triangles of one leaf, SoA: p[vertex][axis][lane]. Unused lanes hold NaN vertices,
-    /// which the watertight test rejects without a separate mask.
+    /// which the watertight test rejects without a separate mask. geomId carries kMaskedLaneBit
+    /// where the lane's mesh is a cut-out (its alpha mask filters the hits).
     struct alignas(16) Triangle4 {
         float p[3][3][4];
         uint32_t geomId[4];
         uint32_t primId[4];
     };
+    /// Set in Triangle4::geomId for a lane whose mesh has an alpha mask: the traversal reads it only
+    /// when that lane is a leaf's answer, and only in scenes that have cut-outs (the kMasked kernels).
+    static constexpr uint32_t kMaskedLaneBit = 0x80000000u;
 
     /// Child reference: inner node (its byte offset in the node array, once built), or a leaf
     /// (kLeafBit). Triangle-only leaf: the first Triangle4 block's byte offset / 16, << 2 | (blocks − 1).
@@ -65,13 +70,23 @@ public:
 
 private:
     /// kCoherent: the child-ordering path for rays whose branches predict well (intersectCoherent).
-    template <bool kAvx, bool kCoherent> bool intersectImpl(const Ray& ray, Hit& hit) const;
-    template <bool kAvx> bool occludedImpl(const Ray& ray) const;
+    /// kMasked: the kernels of scenes with cut-outs (alpha masks); without it, no alpha code at all,
+    /// so scenes without cut-outs run exactly the kernels they ran before masks existed.
+    template <bool kAvx, bool kCoherent, bool kMasked> bool intersectImpl(const Ray& ray, Hit& hit) const;
+    template <bool kAvx, bool kMasked> bool occludedImpl(const Ray& ray) const;
     // The kernels compiled for AVX2: defined, and called, on x86 only.
     bool intersectAvx2(const Ray& ray, Hit& hit) const;
     bool intersectCoherentAvx2(const Ray& ray, Hit& hit) const;
     bool occludedAvx2(const Ray& ray) const;
+    /// The kernels of scenes with cut-outs (hasCutOuts_), each ISA: out of line, apart from the others.
+    template <bool kCoherent> bool intersectMasked(const Ray& ray, Hit& hit) const;
+    bool occludedMasked(const Ray& ray) const;
+    template <bool kCoherent> bool intersectMaskedAvx2(const Ray& ray, Hit& hit) const;
+    bool occludedMaskedAvx2(const Ray& ray) const;
 
+    /// Block `tri`'s test redone with the alpha masks (its answer was a masked lane): the nearest
+    /// kept lane, or lane −1 when none is kept.
+    TriangleCandidate filterMaskedLanes(const TriRay& r, const Triangle4& tri, float tMax) const;
     void prefetchChild(uint32_t ref) const;
     void prefetchAny(uint32_t ref) const;
     /// The first Triangle4 block of a triangle leaf reference.
@@ -96,6 +111,8 @@ private:
     Bounds3f bounds_;
     AccelStats stats_;
     KernelIsa isa_;
+    /// Some mesh with triangles has an alpha mask: the queries run the kMasked kernels.
+    bool hasCutOuts_ = false;
 };
 
 }  // namespace tessera

@@ -1,7 +1,8 @@
 /// \file bvh_traversal.cpp
 /// The BVH's traversal kernels: closest hit (nearest-first, with a branch-free path for incoherent
 /// rays and a branching one for coherent rays) and any hit (unordered), each compiled for the
-/// default target and for AVX2 (kernel_isa.h).
+/// default target and for AVX2 (kernel_isa.h), and once more with the alpha-mask test of cut-out
+/// triangles (kMasked) for scenes that have them.
 #include <cmath>
 #include <cstring>
 
@@ -10,6 +11,7 @@
 #include "accel/mixed_leaf.h"
 #include "accel/robust_bounds.h"
 #include "accel/triangle_simd.h"
+#include "geometry/alpha_mask.h"
 
 namespace tessera {
 
@@ -79,11 +81,21 @@ struct BoxRay {
 TESSERA_INLINE TriangleCandidate intersectTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
     return intersectTriangles<4, false>(r, tri.p, tMax);
 }
-TESSERA_INLINE bool occludedTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
-    return intersectTriangles<4, true>(r, tri.p, tMax).lane >= 0;
+/// A lane the ray hits (any), or −1.
+TESSERA_INLINE int occludedTriangle4(const TriRay& r, const BvhAccel::Triangle4& tri, float tMax) {
+    return intersectTriangles<4, true>(r, tri.p, tMax).lane;
 }
 
 }  // namespace
+
+// Out of line: the slow path of cut-out leaves stays out of the kernels' hot loops.
+__attribute__((noinline)) TriangleCandidate BvhAccel::filterMaskedLanes(const TriRay& r, const Triangle4& tri, float tMax) const {
+    auto keep = [&](int lane, float u, float v) {
+        uint32_t geomId = tri.geomId[lane];
+        return !(geomId & kMaskedLaneBit) || alphaMaskKeeps(geometry_.meshes[geomId & ~kMaskedLaneBit], tri.primId[lane], u, v);
+    };
+    return intersectTrianglesFiltered<4>(r, tri.p, tMax, keep);
+}
 
 /// Starts loading a child the ray will (probably) visit: the traversal is bound by cache misses on
 /// incoherent rays (a node is 3.5 lines, a leaf block 2.75), and issuing every hit child's lines at
@@ -104,7 +116,7 @@ TESSERA_INLINE void BvhAccel::prefetchAny(uint32_t ref) const {
     for (int l = 0; l < 4; ++l) __builtin_prefetch(p + 64 * l);
 }
 
-template <bool kAvx, bool kCoherent>
+template <bool kAvx, bool kCoherent, bool kMasked>
 TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
     if (nodes_.empty() || !isTraceableRay(ray)) return false;
     BoxRay boxRay(ray);
@@ -204,13 +216,21 @@ TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                 const Triangle4& tri = blockPtr[b];
                 TriangleCandidate c = intersectTriangle4(triRay, tri, tMax);
                 if (c.lane < 0) continue;
+                // A cut-out triangle's hit counts only where its alpha mask keeps it; if not, the
+                // block's next-nearest lane may still be the answer.
+                if constexpr (kMasked) {
+                    if (tri.geomId[c.lane] & kMaskedLaneBit) {
+                        c = filterMaskedLanes(triRay, tri, tMax);
+                        if (c.lane < 0) continue;
+                    }
+                }
                 tMax = c.t, bestU = c.u, bestV = c.v;
                 tMaxPadded = splat8(padUp(tMax));
                 bestBlock = &tri, bestLane = c.lane;
             }
         } else {
             uint32_t first = (ref & ~(kLeafBit | kMixedBit)) >> 4, count = ref & 15u;
-            if (intersectMixedLeaf<false>(geometry_, ray, &mixedPrims_[first], count, tMax, bestMixed)) {
+            if (intersectMixedLeaf<false, kMasked>(geometry_, ray, &mixedPrims_[first], count, tMax, bestMixed)) {
                 bestBlock = nullptr;
                 tMaxPadded = splat8(padUp(tMax));
             }
@@ -224,7 +244,9 @@ TESSERA_INLINE bool BvhAccel::intersectImpl(const Ray& ray, Hit& hit) const {
     }
 done:
     if (bestBlock) {
-        triangleHitRecord(bestBlock->p, bestLane, tMax, bestU, bestV, {bestBlock->geomId[bestLane], bestBlock->primId[bestLane]}, hit);
+        PrimRef id{bestBlock->geomId[bestLane], bestBlock->primId[bestLane]};
+        if constexpr (kMasked) id.geomId &= ~kMaskedLaneBit;
+        triangleHitRecord(bestBlock->p, bestLane, tMax, bestU, bestV, id, hit);
         return true;
     }
     if (bestMixed.geomId != kInvalidId) {
@@ -234,7 +256,7 @@ done:
     return false;
 }
 
-template <bool kAvx>
+template <bool kAvx, bool kMasked>
 TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
     if (nodes_.empty() || !isTraceableRay(ray)) return false;
     BoxRay boxRay(ray);
@@ -280,13 +302,20 @@ TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
         } else if (!(ref & kMixedBit)) {
             const Triangle4* blockPtr = leafBlocks(ref);
             uint32_t blocks = (ref & 3u) + 1;
-            for (uint32_t b = 0; b < blocks; ++b)
-                if (occludedTriangle4(triRay, blockPtr[b], tMax)) return true;
+            for (uint32_t b = 0; b < blocks; ++b) {
+                int lane = occludedTriangle4(triRay, blockPtr[b], tMax);
+                if (lane < 0) continue;
+                if constexpr (kMasked) {
+                    if ((blockPtr[b].geomId[lane] & kMaskedLaneBit) && filterMaskedLanes(triRay, blockPtr[b], tMax).lane < 0)
+                        continue;
+                }
+                return true;
+            }
         } else {
             uint32_t first = (ref & ~(kLeafBit | kMixedBit)) >> 4, count = ref & 15u;
             MixedCandidate unused;
             float tHit = ray.tMax;
-            if (intersectMixedLeaf<true>(geometry_, ray, &mixedPrims_[first], count, tHit, unused)) return true;
+            if (intersectMixedLeaf<true, kMasked>(geometry_, ray, &mixedPrims_[first], count, tHit, unused)) return true;
         }
         if (sp == 0) return false;
         ref = stack[--sp];
@@ -295,33 +324,56 @@ TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
 
 #if defined(TESSERA_X86)
 __attribute__((target("avx2"))) bool BvhAccel::intersectAvx2(const Ray& ray, Hit& hit) const {
-    return intersectImpl<true, false>(ray, hit);
+    return intersectImpl<true, false, false>(ray, hit);
 }
 __attribute__((target("avx2"))) bool BvhAccel::intersectCoherentAvx2(const Ray& ray, Hit& hit) const {
-    return intersectImpl<true, true>(ray, hit);
+    return intersectImpl<true, true, false>(ray, hit);
 }
-__attribute__((target("avx2"))) bool BvhAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<true>(ray); }
+__attribute__((target("avx2"))) bool BvhAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<true, false>(ray); }
+template <bool kCoherent>
+__attribute__((target("avx2"))) bool BvhAccel::intersectMaskedAvx2(const Ray& ray, Hit& hit) const {
+    return intersectImpl<true, kCoherent, true>(ray, hit);
+}
+__attribute__((target("avx2"))) bool BvhAccel::occludedMaskedAvx2(const Ray& ray) const { return occludedImpl<true, true>(ray); }
 #endif
 
+template <bool kCoherent>
+__attribute__((noinline)) bool BvhAccel::intersectMasked(const Ray& ray, Hit& hit) const {
+#if defined(TESSERA_X86)
+    if (isa_.avx2()) return intersectMaskedAvx2<kCoherent>(ray, hit);
+#endif
+    return intersectImpl<false, kCoherent, true>(ray, hit);
+}
+
+__attribute__((noinline)) bool BvhAccel::occludedMasked(const Ray& ray) const {
+#if defined(TESSERA_X86)
+    if (isa_.avx2()) return occludedMaskedAvx2(ray);
+#endif
+    return occludedImpl<false, true>(ray);
+}
+
 bool BvhAccel::intersect(const Ray& ray, Hit& hit) const {
+    if (hasCutOuts_) return intersectMasked<false>(ray, hit);
 #if defined(TESSERA_X86)
     if (isa_.avx2()) return intersectAvx2(ray, hit);
 #endif
-    return intersectImpl<false, false>(ray, hit);
+    return intersectImpl<false, false, false>(ray, hit);
 }
 
 bool BvhAccel::intersectCoherent(const Ray& ray, Hit& hit) const {
+    if (hasCutOuts_) return intersectMasked<true>(ray, hit);
 #if defined(TESSERA_X86)
     if (isa_.avx2()) return intersectCoherentAvx2(ray, hit);
 #endif
-    return intersectImpl<false, true>(ray, hit);
+    return intersectImpl<false, true, false>(ray, hit);
 }
 
 bool BvhAccel::occluded(const Ray& ray) const {
+    if (hasCutOuts_) return occludedMasked(ray);
 #if defined(TESSERA_X86)
     if (isa_.avx2()) return occludedAvx2(ray);
 #endif
-    return occludedImpl<false>(ray);
+    return occludedImpl<false, false>(ray);
 }
 
 }  // namespace tessera

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "geometry/alpha_mask.h"
 #include "geometry/intersect.h"
 
 namespace tessera {
@@ -78,6 +79,29 @@ void sphereOccludedFn(const RTCOccludedFunctionNArguments* args) {
     }
 }
 
+/// Intersection and occlusion filter of cut-out meshes (glTF alphaMode MASK): drops the hits their
+/// alpha mask drops, and Embree goes on to the next candidate. The decision uses the barycentrics of
+/// our watertight test (geometry/intersect.h) on the same ray and triangle, not Embree's own
+/// (Möller's, a few ulps apart): every other backend decides with exactly those, so a hit within
+/// rounding of the mask's cutoff contour is kept or dropped alike everywhere, and hit records stay
+/// identical across backends. Where the watertight test misses the triangle (a ray grazing an edge
+/// that only Möller's test hits) Embree's barycentrics decide.
+void alphaFilterFn(const RTCFilterFunctionNArguments* args) {
+    const SceneGeometry* geometry = geometryOf(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        uint32_t geomId = RTCHitN_geomID(args->hit, args->N, i), primId = RTCHitN_primID(args->hit, args->N, i);
+        const TriangleMesh& mesh = geometry->meshes[geomId];
+        float u = RTCHitN_u(args->hit, args->N, i), v = RTCHitN_v(args->hit, args->N, i);
+        Ray r = rayFromEmbree(args->ray, args->N, i);
+        r.tMin = -kInfinity, r.tMax = kInfinity;  // only the barycentrics matter here
+        const glm::uvec3& tri = mesh.triangles[primId];
+        TriangleHit th;
+        if (intersectTriangle(r, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z], th)) u = th.u, v = th.v;
+        if (!alphaMaskKeeps(mesh, primId, u, v)) args->valid[i] = 0;
+    }
+}
+
 void fillRay(const Ray& r, RTCRay& er) {
     er.org_x = r.o.x;
     er.org_y = r.o.y;
@@ -118,6 +142,14 @@ EmbreeAccel::EmbreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
         auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                                    3 * sizeof(uint32_t), mesh.triangles.size()));
         std::memcpy(idx, mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
+        if (mesh.alphaMask) {
+            // Filters on cut-out meshes only: scenes without them run Embree's unfiltered kernels.
+            if (!rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED))
+                throw std::runtime_error("Embree was built without filter functions: cannot render the alpha mask of " + mesh.name);
+            rtcSetGeometryUserData(geom, const_cast<SceneGeometry*>(&geometry));
+            rtcSetGeometryIntersectFilterFunction(geom, alphaFilterFn);
+            rtcSetGeometryOccludedFilterFunction(geom, alphaFilterFn);
+        }
         rtcCommitGeometry(geom);
         rtcAttachGeometryByID(scene, geom, g);
         rtcReleaseGeometry(geom);

@@ -19,6 +19,7 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& /*op
     : geometry_(geometry), config_(config) {
     auto start = std::chrono::steady_clock::now();
     bounds_ = geometry.bounds();
+    for (const TriangleMesh& m : geometry.meshes) hasCutOuts_ |= m.alphaMask && !m.triangles.empty();
     // Exact boxes: padding them would make neighbours sharing a vertex straddle every plane through
     // it. The traversal is conservative instead (kdtree_traversal.cpp).
     GatheredPrimitives gathered = gatherPrimitives(geometry, /*padTriangles=*/false);
@@ -86,6 +87,7 @@ uint32_t KdTreeAccel::makeLeaf(const uint32_t* order, uint32_t count) {
     uint32_t blocks = (count + kLanes - 1) / kLanes, firstBlock = uint32_t(triangles_.size());
     uint32_t ref = blocks <= kKdMaxInlineBlocks && firstBlock < kKdRefIndexLimit ? kKdLeafBit | blocks << 2 | firstBlock << 6
                                                                                   : tableRef({firstBlock, blocks << 1});
+    if (holdsMaskedTriangle(order, count)) ref |= kKdMaskedLeafBit;
     for (uint32_t b = 0; b < blocks; ++b) {
         TriangleBlock& block = triangles_.emplace_back();
         uint32_t inBlock = std::min(uint32_t(kLanes), count - b * kLanes);
@@ -94,6 +96,12 @@ uint32_t KdTreeAccel::makeLeaf(const uint32_t* order, uint32_t count) {
             blockIds_.push_back(lane < inBlock ? prims_[order[b * kLanes + lane]] : PrimRef{kInvalidId, kInvalidId});
     }
     return ref;
+}
+
+bool KdTreeAccel::holdsMaskedTriangle(const uint32_t* order, uint32_t count) const {
+    for (uint32_t k = 0; k < count; ++k)
+        if (geometry_.meshes[prims_[order[k]].geomId].alphaMask) return true;
+    return false;
 }
 
 uint64_t KdTreeAccel::structureHash() const {
@@ -151,6 +159,8 @@ std::string KdTreeAccel::checkInvariants() const {
             else got = blockIds_[size_t(span.first) * kLanes + k];
             if (want.geomId != got.geomId || want.primId != got.primId) return "leaf block differs from the builder's leaf";
         }
+        if (!span.mixed && bool(leafRefs_[it.node] & kKdMaskedLeafBit) != holdsMaskedTriangle(&primIndices_[first], count))
+            return "alpha-mask flag of leaf " + std::to_string(it.node) + " differs from its triangles";
     }
     // 1b. The wide nodes: exactly the binary tree's cells and non-empty leaves.
     if (std::string problem = checkKdWideTree(wide_, nodes_, leafRefs_); !problem.empty()) return problem;

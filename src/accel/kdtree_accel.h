@@ -16,6 +16,7 @@
 #include "accel/kernel_isa.h"
 #include "accel/primitive_refs.h"
 #include "accel/kdtree_wide.h"
+#include "accel/triangle_simd.h"
 #include "geometry/clip.h"
 
 namespace tessera {
@@ -75,13 +76,20 @@ private:
         return {rec.first, rec.payload >> 1, bool(rec.payload & kMixedFlag)};
     }
     /// kCoherent: branches on the entered-slot count (camera rays, intersectCoherent).
-    template <bool kAvx, bool kCoherent> bool intersectImpl(const Ray& ray, Hit& hit) const;
-    template <bool kAvx> bool occludedImpl(const Ray& ray) const;
+    /// kMasked: the kernels of scenes with cut-outs (alpha masks); without it, no alpha code at all,
+    /// so scenes without cut-outs run exactly the kernels they ran before masks existed.
+    template <bool kAvx, bool kCoherent, bool kMasked> bool intersectImpl(const Ray& ray, Hit& hit) const;
+    template <bool kAvx, bool kMasked> bool occludedImpl(const Ray& ray) const;
     // The same traversal compiled for AVX2 (one instruction per 8-lane leaf step): defined, and
     // called, on x86 only (kernel_isa.h).
     bool intersectAvx2(const Ray& ray, Hit& hit) const;
     bool intersectCoherentAvx2(const Ray& ray, Hit& hit) const;
     bool occludedAvx2(const Ray& ray) const;
+    /// The kernels of scenes with cut-outs (hasCutOuts_), each ISA: out of line, apart from the others.
+    template <bool kCoherent> bool intersectMasked(const Ray& ray, Hit& hit) const;
+    bool occludedMasked(const Ray& ray) const;
+    template <bool kCoherent> bool intersectMaskedAvx2(const Ray& ray, Hit& hit) const;
+    bool occludedMaskedAvx2(const Ray& ray) const;
 
     /// The binary tree over the gathered primitives (prims_, boxes `primBounds`).
     KdTree buildBinaryTree(std::span<const Bounds3f> primBounds) const;
@@ -89,6 +97,12 @@ private:
     void buildLeafBlocks();
     /// The wide-node reference of a leaf over prims_[order[0 .. count)], its blocks appended.
     uint32_t makeLeaf(const uint32_t* order, uint32_t count);
+    /// True when one of prims_[order[0 .. count)] (triangles) belongs to a mesh with an alpha mask.
+    bool holdsMaskedTriangle(const uint32_t* order, uint32_t count) const;
+    /// Block `block`'s answer `c` (lane ≥ 0) in a leaf holding cut-out triangles: `c` itself when
+    /// its triangle is opaque, otherwise the block redone with the alpha masks (the nearest kept
+    /// lane; lane −1 when none is kept). Any-hit answers (no barycentrics) are fine as `c`.
+    TriangleCandidate filterMaskedLanes(const TriRay8& r, size_t block, float tMax, TriangleCandidate c) const;
     /// A leaf-table entry's reference (leaves a reference cannot describe inline).
     uint32_t tableRef(KdLeafRecord rec);
 
@@ -108,6 +122,7 @@ private:
     Bounds3f bounds_;   ///< of the geometry (as reported)
     Bounds3f rootCell_; ///< the tree's root cell (union of the primitive boxes)
     float sceneMagnitude_ = 0.f;  ///< largest |coordinate| of the root cell (traversal tolerance)
+    bool hasCutOuts_ = false;  ///< some mesh with triangles has an alpha mask: the kMasked kernels run
     AccelStats stats_;
     KdBuildStats buildStats_;
 };

@@ -5,7 +5,8 @@
 /// planes with a side each) clips the current segment; the entered slots are visited in the binary
 /// traversal's near-first order (closest-hit) or in any order (any-hit), the others pushed. The
 /// closest-hit kernel drops every pushed segment that starts beyond its hit; the any-hit kernel
-/// stops at the first hit.
+/// stops at the first hit. Scenes with cut-out triangles (alpha masks) run a second instantiation of
+/// both (kMasked) that drops the hits the masks drop.
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -15,6 +16,7 @@
 #include "accel/mixed_leaf.h"
 #include "accel/robust_bounds.h"
 #include "accel/triangle_simd.h"
+#include "geometry/alpha_mask.h"
 
 namespace tessera {
 
@@ -188,12 +190,24 @@ TESSERA_INLINE bool startRay(const Ray& ray, const Bounds3f& rootCell_, float sc
 
 }  // namespace
 
+// Out of line: the slow path of cut-out leaves stays out of the kernels' hot loops.
+__attribute__((noinline)) TriangleCandidate KdTreeAccel::filterMaskedLanes(const TriRay8& r, size_t block, float tMax,
+                                                                           TriangleCandidate c) const {
+    const PrimRef* ids = &blockIds_[block * kLanes];
+    auto keep = [&](int lane, float u, float v) {
+        const TriangleMesh& mesh = geometry_.meshes[ids[lane].geomId];
+        return !mesh.alphaMask || alphaMaskKeeps(mesh, ids[lane].primId, u, v);
+    };
+    if (!geometry_.meshes[ids[c.lane].geomId].alphaMask) return c;
+    return intersectTrianglesFiltered<kLanes>(r, triangles_[block].p, tMax, keep);
+}
+
 /// The closest-hit kernel: entered slots visited in the binary traversal's near-first order, the
 /// others pushed. There is no separate early exit: once a hit is found, every pushed segment that
 /// starts beyond it is dropped when popped, and in near-first order that is everything behind the
 /// hit's cell. (An exact exit per segment, for the classic "hit inside this leaf" test, cost an
 /// extra permute, product and min per level in every node.)
-template <bool kAvx, bool kCoherent>
+template <bool kAvx, bool kCoherent, bool kMasked>
 TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
     WideRay wideRay;
     Segment seg;
@@ -269,10 +283,18 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                 for (uint32_t b = 0; b < leaf.count; ++b) {
                     TriangleCandidate c = intersectTriangles<8, false>(triRay, blocks[b].p, tHit);
                     if (c.lane < 0) continue;
+                    // A cut-out triangle's hit counts only where its alpha mask keeps it; if not,
+                    // the block's next-nearest lane may still be the answer.
+                    if constexpr (kMasked) {
+                        if (ref & kKdMaskedLeafBit) {
+                            c = filterMaskedLanes(triRay, leaf.first + b, tHit, c);
+                            if (c.lane < 0) continue;
+                        }
+                    }
                     tHit = c.t, bestU = c.u, bestV = c.v;
                     bestBlock = &blocks[b], bestLane = c.lane;
                 }
-            } else if (intersectMixedLeaf<false>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, tHit, bestMixed)) {
+            } else if (intersectMixedLeaf<false, kMasked>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, tHit, bestMixed)) {
                 bestBlock = nullptr;
             }
         }
@@ -300,7 +322,7 @@ done:
 /// The any-hit kernel: no order among the entered slots, so a node's step needs no branch on how
 /// many it entered: all are pushed at once (compacted by compactIndices, onto a
 /// stack of structure-of-arrays) and the top is popped.
-template <bool kAvx>
+template <bool kAvx, bool kMasked>
 TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
     WideRay wideRay;
     Segment seg;
@@ -338,12 +360,18 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
             const LeafSpan leaf = leafSpan(ref);
             if (!leaf.mixed) {
                 const TriangleBlock* blocks = triangles_.data() + leaf.first;
-                for (uint32_t b = 0; b < leaf.count; ++b)
-                    if (intersectTriangles<8, true>(triRay, blocks[b].p, tHit).lane >= 0) return true;
+                for (uint32_t b = 0; b < leaf.count; ++b) {
+                    TriangleCandidate c = intersectTriangles<8, true>(triRay, blocks[b].p, tHit);
+                    if (c.lane < 0) continue;
+                    if constexpr (kMasked) {
+                        if ((ref & kKdMaskedLeafBit) && filterMaskedLanes(triRay, leaf.first + b, tHit, c).lane < 0) continue;
+                    }
+                    return true;
+                }
             } else {
                 MixedCandidate unused;
                 float t = tHit;
-                if (intersectMixedLeaf<true>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, t, unused)) return true;
+                if (intersectMixedLeaf<true, kMasked>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, t, unused)) return true;
             }
         }
         if (sp == 0) return false;
@@ -354,30 +382,53 @@ TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
 }
 
 #if defined(TESSERA_X86)
-__attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true, false>(ray, hit); }
-__attribute__((target("avx2"))) bool KdTreeAccel::intersectCoherentAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true, true>(ray, hit); }
-__attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<true>(ray); }
+__attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true, false, false>(ray, hit); }
+__attribute__((target("avx2"))) bool KdTreeAccel::intersectCoherentAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true, true, false>(ray, hit); }
+__attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<true, false>(ray); }
+template <bool kCoherent>
+__attribute__((target("avx2"))) bool KdTreeAccel::intersectMaskedAvx2(const Ray& ray, Hit& hit) const {
+    return intersectImpl<true, kCoherent, true>(ray, hit);
+}
+__attribute__((target("avx2"))) bool KdTreeAccel::occludedMaskedAvx2(const Ray& ray) const { return occludedImpl<true, true>(ray); }
 #endif
 
+template <bool kCoherent>
+__attribute__((noinline)) bool KdTreeAccel::intersectMasked(const Ray& ray, Hit& hit) const {
+#if defined(TESSERA_X86)
+    if (isa_.avx2()) return intersectMaskedAvx2<kCoherent>(ray, hit);
+#endif
+    return intersectImpl<false, kCoherent, true>(ray, hit);
+}
+
+__attribute__((noinline)) bool KdTreeAccel::occludedMasked(const Ray& ray) const {
+#if defined(TESSERA_X86)
+    if (isa_.avx2()) return occludedMaskedAvx2(ray);
+#endif
+    return occludedImpl<false, true>(ray);
+}
+
 bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const {
+    if (hasCutOuts_) return intersectMasked<false>(ray, hit);
 #if defined(TESSERA_X86)
     if (isa_.avx2()) return intersectAvx2(ray, hit);
 #endif
-    return intersectImpl<false, false>(ray, hit);
+    return intersectImpl<false, false, false>(ray, hit);
 }
 
 bool KdTreeAccel::intersectCoherent(const Ray& ray, Hit& hit) const {
+    if (hasCutOuts_) return intersectMasked<true>(ray, hit);
 #if defined(TESSERA_X86)
     if (isa_.avx2()) return intersectCoherentAvx2(ray, hit);
 #endif
-    return intersectImpl<false, true>(ray, hit);
+    return intersectImpl<false, true, false>(ray, hit);
 }
 
 bool KdTreeAccel::occluded(const Ray& ray) const {
+    if (hasCutOuts_) return occludedMasked(ray);
 #if defined(TESSERA_X86)
     if (isa_.avx2()) return occludedAvx2(ray);
 #endif
-    return occludedImpl<false>(ray);
+    return occludedImpl<false, false>(ray);
 }
 
 }  // namespace tessera

@@ -47,10 +47,13 @@ struct alignas(64) KdWideNode {
 };
 static_assert(sizeof(KdWideNode) == 64, "one cache line per wide node");
 
-/// Leaf references in a wide node: bit 0 set; bits 2..5 the number of triangle blocks (1..15) and
+/// Leaf references in a wide node: bit 0 set; bit 1 kKdMaskedLeafBit; bits 2..5 the number of triangle blocks (1..15) and
 /// bits 6..31 the first block, or bits 2..5 zero and bits 6..31 an index into the leaf table (leaves
 /// of more than 15 blocks, or holding a sphere).
 inline constexpr uint32_t kKdLeafBit = 1u;
+/// Set in a leaf reference (bit 1) when the leaf holds a triangle of a cut-out mesh (alpha mask):
+/// only then does the traversal look up whether the triangle it hit is masked.
+inline constexpr uint32_t kKdMaskedLeafBit = 2u;
 inline constexpr uint32_t kKdMaxInlineBlocks = 15;
 inline constexpr uint32_t kKdRefIndexLimit = 1u << 26;
 /// Marks an empty leaf in the per-binary-node reference list (it gets no slot).

@@ -7,6 +7,7 @@
 
 #include "accel/accel.h"
 #include "accel/primitive_refs.h"
+#include "geometry/alpha_mask.h"
 #include "geometry/intersect.h"
 
 namespace tessera {
@@ -18,8 +19,9 @@ struct MixedCandidate {
 };
 
 /// Tests `count` primitives against (ray.tMin, tHit). On a closer hit updates tHit and `best` and
-/// returns true; with kAnyHit returns true at the first hit.
-template <bool kAnyHit>
+/// returns true; with kAnyHit returns true at the first hit. With kMasked (scenes with cut-outs),
+/// hits that a triangle's alpha mask drops do not count; without it masks are not looked at.
+template <bool kAnyHit, bool kMasked>
 inline bool intersectMixedLeaf(const SceneGeometry& g, const Ray& ray, const PrimRef* prims, uint32_t count, float& tHit,
                                MixedCandidate& best) {
     bool found = false;
@@ -39,6 +41,8 @@ inline bool intersectMixedLeaf(const SceneGeometry& g, const Ray& ray, const Pri
             const glm::uvec3& tri = mesh.triangles[p.primId];
             TriangleHit th;
             if (!intersectTriangle(clipped, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z], th)) continue;
+            if constexpr (kMasked)
+                if (mesh.alphaMask && !alphaMaskKeeps(mesh, p.primId, th.u, th.v)) continue;  // a cut-out's hole
             if constexpr (kAnyHit) return true;
             tHit = th.t;
             best = {p.geomId, p.primId, th.u, th.v};

@@ -71,11 +71,13 @@ struct TriangleCandidate {
     int lane;  ///< −1: no lane hit
 };
 
-/// The nearest lane hit in (tMin, tMax), or lane −1. With `kAnyHit`, any hitting lane (same
-/// arithmetic, so the same answer as the closest-hit test), without the serial search for the
-/// nearest lane and without barycentrics.
+/// The nearest lane hit in (tMin, tMax), or lane −1 (among lanes at equal t, the lowest). With
+/// `kAnyHit`, any hitting lane (same arithmetic, so the same answer as the closest-hit test),
+/// without the serial search for the nearest lane and without barycentrics. Lanes set in
+/// `skipLanes` are ignored (the alpha-mask path below; a constant 0 everywhere else, which folds away).
 template <int W, bool kAnyHit>
-TESSERA_INLINE TriangleCandidate intersectTriangles(const TriRayW<W>& r, const float (&p)[3][3][W], float tMax) {
+TESSERA_INLINE TriangleCandidate intersectTriangles(const TriRayW<W>& r, const float (&p)[3][3][W], float tMax,
+                                                    uint32_t skipLanes = 0) {
     using L = Lanes<W>;
     using F = typename L::F;
     using I = typename L::I;
@@ -114,7 +116,7 @@ TESSERA_INLINE TriangleCandidate intersectTriangles(const TriRayW<W>& r, const f
     F invDet = L::splat(1.f) / det;
     F t = T * invDet;
     valid &= (t > L::splat(r.tMin)) & (t < L::splat(tMax));
-    uint32_t bits = L::mask(valid);
+    uint32_t bits = L::mask(valid) & ~skipLanes;
     if constexpr (kAnyHit) return {0.f, 0.f, 0.f, bits ? __builtin_ctz(bits) : -1};
     TriangleCandidate best{tMax, 0.f, 0.f, -1};
     while (bits) {
@@ -123,6 +125,22 @@ TESSERA_INLINE TriangleCandidate intersectTriangles(const TriRayW<W>& r, const f
         if (t[i] < best.t) best = {t[i], V[i] * invDet[i], Wf[i] * invDet[i], i};
     }
     return best;
+}
+
+/// intersectTriangles for a block holding cut-out triangles (geometry/alpha_mask.h): a lane counts
+/// only where `keep(lane, u, v)` says so. The block is tested again without each rejected lane, so
+/// a rejected lane never hides the next-nearest hit behind it; the answer is the nearest kept lane
+/// (lowest lane among equal t, as intersectTriangles), or lane −1. Any-hit queries ask it too, so
+/// they keep and drop the same lanes, with the same barycentrics, as closest-hit ones. Called only
+/// on a masked triangle's hit: unmasked geometry never runs it.
+template <int W, class Keep>
+inline TriangleCandidate intersectTrianglesFiltered(const TriRayW<W>& r, const float (&p)[3][3][W], float tMax, const Keep& keep) {
+    uint32_t rejected = 0;
+    while (true) {
+        TriangleCandidate c = intersectTriangles<W, false>(r, p, tMax, rejected);
+        if (c.lane < 0 || keep(c.lane, c.u, c.v)) return c;
+        rejected |= 1u << c.lane;
+    }
 }
 
 /// Fills the W lanes of a leaf block, p[vertex][axis][lane], with the vertices of `count` ≤ W

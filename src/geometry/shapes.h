@@ -49,6 +49,10 @@ struct Sphere {
 struct SceneGeometry {
     std::vector<TriangleMesh> meshes;
     std::vector<Sphere> spheres;
+    /// The decoded images the meshes' alpha masks point into, for geometry that outlives the Scene
+    /// that loaded it (loadGeometryFile: validate-accel, bench-accel, the API's geometry loads).
+    /// Null inside a Scene, which owns its images itself.
+    std::shared_ptr<const std::vector<std::unique_ptr<Image>>> maskImages;
 
     uint32_t sphereGeomId() const { return uint32_t(meshes.size()); }
     size_t primitiveCount() const;

@@ -29,6 +29,9 @@ SceneGeometry loadGeometryFile(const std::string& path, std::optional<CameraDesc
         camera = scene.camera;
         g.meshes = std::move(scene.geometry.meshes);
         g.spheres = std::move(scene.geometry.spheres);
+        // Alpha masks point into the scene's images: they move along (same addresses) and live as
+        // long as the geometry.
+        g.maskImages = std::make_shared<const std::vector<std::unique_ptr<Image>>>(std::move(scene.images));
     } else if (ext == ".ply") {
         g.meshes.push_back(loadPlyMesh(path, options));
     } else if (ext == ".obj") {

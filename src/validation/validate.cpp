@@ -4,6 +4,7 @@
 
 #include <cstring>
 
+#include "geometry/alpha_mask.h"
 #include "geometry/intersect.h"
 
 namespace tessera {
@@ -67,7 +68,33 @@ struct PrimCheck {
     bool nearBoundary = false;
     double t = -1.0;
     double slack = 0.0;
+    /// Cut-out triangles (alpha mask): whether the mask keeps the point where the ray meets the
+    /// plane, and whether that answer could flip within `slack` of it (a point on the mask's cutoff
+    /// contour, or no point at all for a ray parallel to the plane), where keeping and dropping the
+    /// hit are both admissible. Opaque primitives: kept, never marginal.
+    bool alphaKept = true;
+    bool alphaMarginal = false;
 };
+
+/// The alpha-mask part of a PrimCheck: the mask evaluated at the double-precision barycentrics
+/// (b1, b2) of the ray's crossing with the plane and at the four points around it that float
+/// rounding could have reported instead: c.slack (world units) off the plane moves the crossing by
+/// slack / cos θ along it, θ the angle between the ray and the normal (as in sameHitRecord).
+void checkAlpha(const TriangleMesh& m, uint32_t primId, const Vec3d (&p)[3], const Ray& r, double b1, double b2, PrimCheck& c) {
+    auto keeps = [&](double u, double v) { return alphaMaskKeeps(m, primId, float(u), float(v)); };
+    c.alphaKept = keeps(b1, b2);
+    Vec3d cross = glm::cross(p[1] - p[0], p[2] - p[0]), d(r.d);
+    double area2 = glm::length(cross);
+    double cosine = area2 > 0.0 ? std::abs(glm::dot(cross, d)) / (area2 * glm::length(d)) : 0.0;
+    double band = c.slack / std::max(cosine, 1e-6);
+    // Barycentric b1 grows by 1 across the altitude from p1 to the edge p0–p2 (b2 likewise).
+    double du = area2 > 0.0 ? band * glm::length(p[2] - p[0]) / area2 : 1.0;
+    double dv = area2 > 0.0 ? band * glm::length(p[1] - p[0]) / area2 : 1.0;
+    // A crossing that rounding could move by more than a hundredth of the triangle (a ray almost in
+    // its plane) has no mask answer to insist on.
+    c.alphaMarginal = du > 0.01 || dv > 0.01 || keeps(b1 - du, b2) != c.alphaKept || keeps(b1 + du, b2) != c.alphaKept ||
+                      keeps(b1, b2 - dv) != c.alphaKept || keeps(b1, b2 + dv) != c.alphaKept;
+}
 
 PrimCheck checkPrimitive(const SceneGeometry& g, const Ray& r, uint32_t geomId, uint32_t primId, float edgeUlps) {
     PrimCheck c;
@@ -93,8 +120,10 @@ PrimCheck checkPrimitive(const SceneGeometry& g, const Ray& r, uint32_t geomId, 
         if (!plane) {
             // Parallel to the plane: only touching an edge counts, at the closest approach.
             if (c.nearBoundary) c.t = edgeT;
+            c.alphaMarginal = bool(m.alphaMask);  // no single point to evaluate the mask at
             return c;
         }
+        if (m.alphaMask) checkAlpha(m, primId, p, r, b1, b2, c);
         // A ray grazing an edge or vertex is hit there: the plane intersection is ill-conditioned
         // when the ray lies (nearly) in the triangle's plane — an edge-on triangle touched at a
         // vertex it shares with the triangle the reference reports — and would put t anywhere.
@@ -175,10 +204,23 @@ bool closerToTruth(const SceneGeometry& g, const Ray& r, const Hit& test, const 
     return within(test.t, ref.t, t, std::abs(t)) && within(test.u, ref.u, b1, 1.0) && within(test.v, ref.v, b2, 1.0);
 }
 
+/// True when `h` lies on a cut-out triangle where its alpha mask drops the hit, confirmed in double
+/// precision (not within rounding of the mask's cutoff contour): no backend may report it.
+bool inCutOutHole(const SceneGeometry& g, const Ray& r, const Hit& h, const ValidationTolerances& tol) {
+    if (h.geomId >= g.meshes.size() || !g.meshes[h.geomId].alphaMask) return false;
+    PrimCheck c = checkPrimitive(g, r, h.geomId, h.primId, tol.edgeUlps);
+    return !c.alphaKept && !c.alphaMarginal;
+}
+
 /// Classifies one ray. Returns 0 agreement, 1 tie, 2 error (with `why`).
+/// Cut-out triangles: a reported hit must be kept by its alpha mask, and the rules below, written for
+/// opaque primitives, then hold unchanged for the hits that count; in addition a hit that only one
+/// answer has (or the nearer one of two) is a tie where its mask's answer is marginal.
 int classify(const SceneGeometry& g, const Ray& r, bool th, const Hit& ht, bool rh, const Hit& hr,
              const ValidationTolerances& tol, std::string& why) {
     if (!th && !rh) return 0;
+    if (th && inCutOutHole(g, r, ht, tol)) return why = "hit inside a cut-out hole (alpha mask)", 2;
+    if (rh && inCutOutHole(g, r, hr, tol)) return why = "the reference hits inside a cut-out hole (alpha mask)", 2;
     if (th && rh && ht.geomId == hr.geomId && ht.primId == hr.primId) {
         if (sameHitRecord(g, r, ht, hr, tol, why)) return 0;
         // Ill-conditioned primitives (long slivers) put both float tests far from the truth: what
@@ -188,7 +230,7 @@ int classify(const SceneGeometry& g, const Ray& r, bool th, const Hit& ht, bool 
     if (th != rh) {
         const Hit& h = th ? ht : hr;
         PrimCheck c = checkPrimitive(g, r, h.geomId, h.primId, tol.edgeUlps);
-        if (c.nearBoundary) return 1;
+        if (c.nearBoundary || c.alphaMarginal) return 1;
         // A hit within the tolerance of tMin or tMax may be reported either way.
         double tTol = tTolerance(r, h.t, tol, c.slack);
         if (std::abs(double(h.t) - double(r.tMin)) <= tTol || std::abs(double(h.t) - double(r.tMax)) <= tTol) return 1;
@@ -206,7 +248,7 @@ int classify(const SceneGeometry& g, const Ray& r, bool th, const Hit& ht, bool 
     double tTol = std::max(tTolerance(r, ct.t, tol, ct.slack), tTolerance(r, cr.t, tol, cr.slack));
     if (std::abs(ct.t - cr.t) <= tTol && std::abs(double(ht.t) - double(hr.t)) <= tTol) return 1;
     const PrimCheck& nearer = ct.t < cr.t ? ct : cr;
-    if (nearer.nearBoundary) return 1;
+    if (nearer.nearBoundary || nearer.alphaMarginal) return 1;
     // Ours is a real hit (double precision) no farther than the reference's: the reference skipped it.
     if (ct.hitInside && ct.t > double(r.tMin) && ct.t <= cr.t + tTol) return 1;
     why = "different primitive at a different distance";
