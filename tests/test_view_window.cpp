@@ -314,8 +314,11 @@ TEST(ViewWindow, KeysAndMouseMoveTheCameraRestartAndThePixelsMatchABatchRender) 
     ASSERT_EQ(viewed.width, 160);
     ASSERT_EQ(batchImage.width, 160);
     EXPECT_EQ(viewed.rgba, batchImage.rgba) << "the saved preview differs from `tessera render " << renderArgs << "`";
-    for (const auto& [k, v] : viewed.metadata)
-        if (k == "tessera:spp") EXPECT_EQ(v, std::to_string(sppLimit));
+    for (const auto& [k, v] : viewed.metadata) {
+        if (k == "tessera:spp") {
+            EXPECT_EQ(v, std::to_string(sppLimit));
+        }
+    }
 
     // The window shows exactly that image through the PNG's display transform.
     int w = 0, h = 0;

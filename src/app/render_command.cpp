@@ -14,6 +14,7 @@
 
 #include "accel/accel.h"
 #include "app/commands.h"
+#include "app/scene_options.h"
 #include "core/error.h"
 #include "core/fnv1a.h"
 #include "core/version.h"
@@ -30,52 +31,19 @@
 namespace tessera::app {
 namespace {
 
-struct RenderArgs {
-    std::string scene, output, png, resolution, integrator, accel, lookAt, display = "sRGB", view = "Standard";
+struct RenderArgs : SceneOptions {
+    std::string output, png, accel, display = "sRGB", view = "Standard";
     std::string bdptStrategies;  ///< directory for the per-strategy debug images (empty: none)
     std::string debugPixel;  ///< "x,y,s": replay one sample with a trace instead of rendering
-    std::string env;                     ///< --env FILE|R,G,B: replaces the scene's environment
-    std::optional<double> envRotate, envIntensity;
-    int spp = 0, threads = 0;
-    std::optional<int> maxDepth;  ///< --max-depth; unset: the scene's
-    double timeLimit = 0.0, fovDeg = 0.0;
-    int64_t seed = -1;
-    bool quiet = false, json = false, noPng = false, allowExternalFiles = false;
-    double maxMemoryGiB = 16.0;
+    int threads = 0;
+    double timeLimit = 0.0;
+    bool quiet = false, json = false, noPng = false;
     double checkpointSeconds = -1.0;  ///< < 0: no checkpoints
     bool resume = false;
     uint64_t stopAfterTiles = 0;      ///< test hook (hidden option)
 };
 
-std::vector<float> parseNumbers(const std::string& text, const std::string& option) {
-    std::vector<float> v;
-    std::stringstream ss(text);
-    std::string item;
-    while (std::getline(ss, item, ',')) {
-        try {
-            size_t used = 0;
-            v.push_back(std::stof(item, &used));
-            if (used != item.size()) throw std::invalid_argument(item);
-        } catch (const std::exception&) {
-            throw InputError(option + ": '" + item + "' is not a number");
-        }
-    }
-    return v;
-}
 
-/// --look-at EX,EY,EZ,TX,TY,TZ[,UX,UY,UZ] → a camera-to-world matrix looking down local −z.
-Mat4f lookAtCamera(const std::string& text) {
-    std::vector<float> v = parseNumbers(text, "--look-at");
-    if (v.size() != 6 && v.size() != 9) throw InputError("--look-at needs 6 or 9 comma-separated numbers");
-    Vec3f eye(v[0], v[1], v[2]), target(v[3], v[4], v[5]);
-    Vec3f up = v.size() == 9 ? Vec3f(v[6], v[7], v[8]) : Vec3f(0, 1, 0);
-    Vec3f f = target - eye;
-    if (!(glm::length(f) > 0.f) || !(glm::length(glm::cross(f, up)) > 0.f))
-        throw InputError("--look-at: eye and target coincide or the up vector is parallel to the view direction");
-    return glm::inverse(glm::lookAt(eye, target, up));
-}
-
-std::string stem(const std::string& path) { return std::filesystem::path(path).stem().string(); }
 
 /// `--bdpt-strategies DIR` (pbrt's visualizestrategies): one EXR per strategy (s, t), weighted and
 /// unweighted, for paths of at most maxDepth + 2 vertices (5 when the depth is unlimited). Each image
@@ -161,80 +129,9 @@ std::string describe(const SampleId& id) {
     return "pixel (" + std::to_string(id.x) + "," + std::to_string(id.y) + ") sample " + std::to_string(id.sample);
 }
 
-/// "640x480" → (width, height), each side 1..65536.
-void parseResolution(const std::string& text, int& width, int& height) {
-    int w = 0, h = 0;
-    char x = 0, extra = 0;
-    std::stringstream ss(text);
-    if (!(ss >> w >> x >> h) || (x != 'x' && x != 'X') || (ss >> extra) || w < 1 || h < 1 || w > 65536 || h > 65536)
-        throw InputError("--resolution must look like 640x480 (each side 1..65536), got '" + text + "'");
-    width = w;
-    height = h;
-}
 
-/// `--env FILE|R,G,B [--env-rotate DEG] [--env-intensity S]`: replaces (or adjusts) the scene's
-/// environment light and rebuilds its light set. Rotation and intensity given alone adjust the
-/// scene's own environment.
-void applyEnvironmentOptions(const RenderArgs& a, Scene& scene) {
-    if (a.env.empty() && !a.envRotate && !a.envIntensity) return;
-    if (!a.env.empty()) {
-        EnvironmentDesc env;
-        bool isColor = a.env.find(',') != std::string::npos && !std::filesystem::exists(a.env);
-        if (isColor) {
-            std::vector<float> c = parseNumbers(a.env, "--env");
-            if (c.size() != 3 || !(c[0] >= 0.f && c[1] >= 0.f && c[2] >= 0.f) || !isFinite(Vec3f(c[0], c[1], c[2])))
-                throw InputError("--env: a colour must be three finite non-negative numbers R,G,B, got '" + a.env + "'");
-            env.color = Rgb(c[0], c[1], c[2]);
-            env.source = "constant " + a.env;
-        } else {
-            scene.images.push_back(readEnvironmentImage(a.env));
-            env.image = scene.images.back().get();
-            env.source = a.env;
-        }
-        scene.environment = env;
-    }
-    if (!scene.environment)
-        throw InputError("--env-rotate and --env-intensity need an environment: the scene has none, add --env FILE|R,G,B");
-    if (a.envRotate) scene.environment->rotationDeg = float(*a.envRotate);
-    if (a.envIntensity) scene.environment->intensity = float(*a.envIntensity);
-    scene.finalize();
-}
 
-/// The scene's render settings with the command line's overrides. The camera options change
-/// `scene.camera`; a scene without a camera needs --look-at.
-RenderSettings resolveSettings(const RenderArgs& a, Scene& scene) {
-    RenderSettings s = scene.settings;
-    applyEnvironmentOptions(a, scene);
-    if (!a.resolution.empty()) parseResolution(a.resolution, s.width, s.height);
-    if (a.spp > 0) s.spp = a.spp;
-    if (a.maxDepth) s.maxDepth = *a.maxDepth;
-    if (a.seed >= 0) s.seed = uint64_t(a.seed);
-    if (!a.integrator.empty()) s.integrator = a.integrator;
 
-    if (!a.lookAt.empty()) {
-        CameraDesc d = scene.camera.value_or(CameraDesc{});
-        d.cameraToWorld = lookAtCamera(a.lookAt);
-        scene.camera = d;
-    }
-    if (a.fovDeg > 0.0) {
-        if (!scene.camera) throw InputError("--fov needs a camera: the scene has none, add --look-at");
-        scene.camera->yfov = float(a.fovDeg * kPi / 180.0);
-    }
-    if (!scene.camera)
-        throw SceneError(a.scene, "cameras", "the scene has no camera; give one with --look-at EX,EY,EZ,TX,TY,TZ [--fov DEG]");
-    return s;
-}
-
-/// Refuses a resolution whose film alone would exceed the memory limit, instead of dying in the
-/// allocator.
-void checkFilmFits(const RenderArgs& a, const RenderSettings& s) {
-    double filmBytes = Film::memoryBytes(s.width, s.height);
-    if (filmBytes > a.maxMemoryGiB * double(1ull << 30))
-        throw InputError(a.scene + ": " + (a.resolution.empty() ? "extensions.TESSERA_render: " : "--resolution: ") +
-                         "resolution " + std::to_string(s.width) + "x" + std::to_string(s.height) + " needs " +
-                         std::to_string(int(filmBytes / double(1ull << 30) + 0.5)) + " GiB of film memory, over the limit of " +
-                         std::to_string(int(a.maxMemoryGiB)) + " GiB (--max-memory)");
-}
 
 /// Where the images go; `display` is set when a PNG is written (checked before the render starts).
 struct OutputPaths {
@@ -322,31 +219,6 @@ private:
     std::chrono::steady_clock::time_point last_;
 };
 
-/// What an output image records about its render.
-io::Metadata outputMetadata(const RenderArgs& a, const RenderSettings& s, const Integrator& integrator, const Accel& accel,
-                            const RenderStats& stats) {
-    io::Metadata md = {
-        {"Software", std::string("Tessera ") + versionString() + " (" + gitRevision() + ")"},
-        {"tessera:version", versionString()},
-        {"tessera:git", gitRevision()},
-        {"tessera:scene", a.scene},
-        {"tessera:scene_hash", fnv1a64OfFile(a.scene)},
-        {"tessera:integrator", std::string(integrator.name())},
-        {"tessera:accel", std::string(accel.name())},
-        {"tessera:spp", std::to_string(stats.sppCompleted)},
-        {"tessera:samples", std::to_string(stats.samples)},
-        {"tessera:seed", std::to_string(s.seed)},
-        {"tessera:max_depth", std::to_string(s.maxDepth)},
-        {"tessera:resolution", std::to_string(s.width) + "x" + std::to_string(s.height)},
-        {"tessera:render_seconds", std::to_string(stats.seconds)},
-        {"tessera:threads", std::to_string(stats.threads)},
-        {"tessera:nonfinite_dropped", std::to_string(stats.nonFiniteDropped)},
-        {"tessera:interrupted", stats.interrupted ? "true" : "false"},
-        {"tessera:resumed", a.resume ? "true" : "false"},
-    };
-    if (stats.firstNonFinite) md.push_back({"tessera:first_nonfinite", describe(*stats.firstNonFinite)});
-    return md;
-}
 
 double samplesPerSecond(const RenderStats& stats) { return stats.seconds > 0 ? double(stats.samples) / stats.seconds : 0.0; }
 
@@ -395,12 +267,7 @@ void printJson(const RenderArgs& a, const RenderSettings& s, const Integrator& i
 }
 
 int runRender(const RenderArgs& a) {
-    std::vector<std::string> warnings;
-    SceneLoadOptions loadOptions;
-    loadOptions.allowExternalFiles = a.allowExternalFiles;
-    loadOptions.maxFileBytes = uint64_t(a.maxMemoryGiB * double(1ull << 30));
-    Scene scene = loadGltfScene(a.scene, warnings, loadOptions);
-    for (const std::string& w : warnings) printWarning(w);
+    Scene scene = loadScene(a);
 
     RenderSettings s = resolveSettings(a, scene);
     checkFilmFits(a, s);
@@ -429,7 +296,12 @@ int runRender(const RenderArgs& a) {
     ro.progress = &progress;
     RenderStats stats = renderImage(ctx, *integrator, film, ro);
 
-    io::Metadata md = outputMetadata(a, s, *integrator, *accel, stats);
+    io::Metadata md = imageMetadata(a.scene, s,
+                                    ImageFacts{.integrator = std::string(integrator->name()), .accel = std::string(accel->name()),
+                                               .spp = stats.sppCompleted, .samples = stats.samples,
+                                               .nonFiniteDropped = stats.nonFiniteDropped, .seconds = stats.seconds,
+                                               .threads = stats.threads, .interrupted = stats.interrupted, .resumed = a.resume});
+    if (stats.firstNonFinite) md.push_back({"tessera:first_nonfinite", describe(*stats.firstNonFinite)});
     if (scene.environment)
         md.push_back({"tessera:environment", scene.environment->source + " rotation " + std::to_string(scene.environment->rotationDeg) +
                                                  " intensity " + std::to_string(scene.environment->intensity)});

@@ -21,6 +21,7 @@
 
 #include "accel/accel.h"
 #include "app/commands.h"
+#include "app/scene_options.h"
 #include "core/error.h"
 #include "core/fnv1a.h"
 #include "core/version.h"
@@ -37,60 +38,14 @@
 namespace tessera::app {
 namespace {
 
-struct ViewArgs {
-    std::string scene, output, resolution, integrator, accel = "embree", lookAt, display = "sRGB", view = "Standard", script;
-    int spp = 0, threads = 0;
-    std::optional<int> maxDepth;
-    int64_t seed = -1;
-    double fovDeg = 0.0, exitAfter = 0.0, speed = 0.0;
-    bool printCamera = false, allowExternalFiles = false;
-    double maxMemoryGiB = 16.0;
+struct ViewArgs : SceneOptions {
+    std::string output, accel = "embree", display = "sRGB", view = "Standard", script;
+    int threads = 0;
+    double exitAfter = 0.0, speed = 0.0;
+    bool printCamera = false;
 };
 
-std::string stem(const std::string& path) { return std::filesystem::path(path).stem().string(); }
 
-/// The scene's settings with the command line's overrides, as `render` resolves them.
-RenderSettings resolveSettings(const ViewArgs& a, Scene& scene) {
-    RenderSettings s = scene.settings;
-    if (!a.resolution.empty()) {
-        int w = 0, h = 0;
-        char x = 0, extra = 0;
-        std::stringstream ss(a.resolution);
-        if (!(ss >> w >> x >> h) || (x != 'x' && x != 'X') || (ss >> extra) || w < 1 || h < 1 || w > 16384 || h > 16384)
-            throw InputError("--resolution must look like 960x540 (each side 1..16384), got '" + a.resolution + "'");
-        s.width = w;
-        s.height = h;
-    }
-    if (a.maxDepth) s.maxDepth = *a.maxDepth;
-    if (a.seed >= 0) s.seed = uint64_t(a.seed);
-    if (!a.integrator.empty()) s.integrator = a.integrator;
-    if (!a.lookAt.empty()) {
-        std::vector<float> v;
-        std::stringstream ss(a.lookAt);
-        for (std::string item; std::getline(ss, item, ',');) {
-            char* end = nullptr;
-            v.push_back(std::strtof(item.c_str(), &end));
-            if (item.empty() || *end != '\0') throw InputError("--look-at: '" + item + "' is not a number");
-        }
-        if (v.size() != 6) throw InputError("--look-at needs 6 comma-separated numbers EX,EY,EZ,TX,TY,TZ");
-        Vec3f eye(v[0], v[1], v[2]), target(v[3], v[4], v[5]), up(0, 1, 0);
-        if (!(glm::length(glm::cross(target - eye, up)) > 0.f))
-            throw InputError("--look-at: eye and target coincide or the view direction is vertical");
-        CameraDesc d = scene.camera.value_or(CameraDesc{});
-        d.cameraToWorld = glm::inverse(glm::lookAt(eye, target, up));  // as render --look-at
-        scene.camera = d;
-    }
-    if (a.fovDeg > 0.0) {
-        if (!scene.camera) throw InputError("--fov needs a camera: the scene has none, add --look-at");
-        scene.camera->yfov = float(a.fovDeg * kPi / 180.0);
-    }
-    if (!scene.camera)
-        throw SceneError(a.scene, "cameras", "the scene has no camera; give one with --look-at EX,EY,EZ,TX,TY,TZ [--fov DEG]");
-    if (Film::memoryBytes(s.width, s.height) > a.maxMemoryGiB * double(1ull << 30))
-        throw InputError(a.scene + ": resolution " + std::to_string(s.width) + "x" + std::to_string(s.height) +
-                         " needs more film memory than --max-memory allows");
-    return s;
-}
 
 /// The window: an SDL software renderer and one streaming RGB texture, re-made when the frame size
 /// changes (reduced frames are stretched to the window with nearest-neighbour filtering).
@@ -373,26 +328,11 @@ private:
             printWarning("view: nothing to save yet: hold the camera still until the first full-resolution pass");
             return;
         }
-        io::Metadata md = {
-            {"Software", std::string("Tessera ") + versionString() + " (" + gitRevision() + ")"},
-            {"tessera:version", versionString()},
-            {"tessera:git", gitRevision()},
-            {"tessera:scene", a_.scene},
-            {"tessera:scene_hash", fnv1a64OfFile(a_.scene)},
-            {"tessera:integrator", f->integrator},
-            {"tessera:accel", std::string(accel_.name())},
-            {"tessera:spp", std::to_string(f->spp)},
-            {"tessera:samples", std::to_string(f->samples)},
-            {"tessera:seed", std::to_string(settings_.seed)},
-            {"tessera:max_depth", std::to_string(settings_.maxDepth)},
-            {"tessera:resolution", std::to_string(f->width) + "x" + std::to_string(f->height)},
-            {"tessera:render_seconds", std::to_string(f->renderSeconds)},
-            {"tessera:threads", std::to_string(f->threads)},
-            {"tessera:nonfinite_dropped", std::to_string(f->nonFiniteDropped)},
-            {"tessera:interrupted", "false"},
-            {"tessera:resumed", "false"},
-            {"tessera:view_camera", fly_.renderArguments()},
-        };
+        io::Metadata md = imageMetadata(a_.scene, settings_,
+                                        ImageFacts{.integrator = f->integrator, .accel = std::string(accel_.name()), .spp = f->spp,
+                                                   .samples = f->samples, .nonFiniteDropped = f->nonFiniteDropped,
+                                                   .seconds = f->renderSeconds, .threads = f->threads});
+        md.push_back({"tessera:view_camera", fly_.renderArguments()});
         std::string png = std::filesystem::path(exr_).replace_extension(".png").string();
         try {
             io::writeExr(exr_, f->width, f->height, f->rgba.data(), md);
@@ -420,13 +360,9 @@ private:
 };
 
 int runView(const ViewArgs& a) {
-    std::vector<std::string> warnings;
-    SceneLoadOptions loadOptions;
-    loadOptions.allowExternalFiles = a.allowExternalFiles;
-    loadOptions.maxFileBytes = uint64_t(a.maxMemoryGiB * double(1ull << 30));
-    Scene scene = loadGltfScene(a.scene, warnings, loadOptions);
-    for (const std::string& w : warnings) printWarning(w);
+    Scene scene = loadScene(a);
     RenderSettings s = resolveSettings(a, scene);
+    checkFilmFits(a, s);
     createIntegrator(s.integrator);  // an unknown name fails before the window opens
     if (!a.script.empty()) view::readScript(a.script);  // so does a bad script
     AccelOptions accelOptions;

@@ -1,0 +1,54 @@
+#pragma once
+/// \file scene_options.h
+/// What `tessera render` and `tessera view` share: the options that pick and override a scene
+/// (resolution, integrator, seed, camera, environment, limits), loading it with its warnings, the
+/// resolved render settings, and the metadata an output image records. One home, so that a view's
+/// saved image and a batch render of the same camera say the same things.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/image_output.h"
+#include "scene/scene.h"
+
+namespace tessera::app {
+
+/// The scene options of both commands (each registers them on its own command line).
+struct SceneOptions {
+    std::string scene, resolution, integrator, lookAt;
+    std::string env;  ///< --env FILE|R,G,B: replaces the scene's environment
+    std::optional<double> envRotate, envIntensity;
+    int spp = 0;                   ///< 0: the scene's
+    std::optional<int> maxDepth;   ///< --max-depth; unset: the scene's
+    int64_t seed = -1;             ///< < 0: the scene's
+    double fovDeg = 0.0;           ///< 0: the camera's
+    bool allowExternalFiles = false;
+    double maxMemoryGiB = 16.0;    ///< input files and the film
+};
+
+/// "a,b,c" → numbers; InputError naming `option` on anything else.
+std::vector<float> parseNumbers(const std::string& text, const std::string& option);
+/// The file name without folder and extension ("scenes/box.gltf" → "box").
+std::string stem(const std::string& path);
+
+/// Loads `o.scene` under the options' limits and prints its warnings.
+Scene loadScene(const SceneOptions& o);
+/// The scene's render settings with the command line's overrides. The camera and environment
+/// options change `scene`; a scene without a camera needs --look-at.
+RenderSettings resolveSettings(const SceneOptions& o, Scene& scene);
+/// Refuses a resolution whose film alone would exceed the memory limit, instead of dying in the
+/// allocator.
+void checkFilmFits(const SceneOptions& o, const RenderSettings& s);
+
+/// What an output image's metadata says about the samples it holds.
+struct ImageFacts {
+    std::string integrator, accel;
+    uint64_t spp = 0, samples = 0, nonFiniteDropped = 0;
+    double seconds = 0.0;
+    int threads = 0;
+    bool interrupted = false, resumed = false;
+};
+/// The provenance every output image records (EXR attributes, PNG text).
+io::Metadata imageMetadata(const std::string& scenePath, const RenderSettings& s, const ImageFacts& f);
+
+}  // namespace tessera::app
