@@ -101,6 +101,10 @@ Scene cubeScene(Rgb sigma) {
 TEST(VolumeAttenuation, SegmentRuleIsSymmetricAndOnlyInside) {
     const Rgb sigma = sigmaOf(kAttenuationColor, kAttenuationDistance);
     Material vol = volumeMaterial(1.5f, 0.3f, sigma);
+    Scene scene = cubeScene(sigma);  // the context the rule reads emitters from (none here)
+    std::unique_ptr<Accel> accel = createAccel("embree", scene.geometry);
+    Camera camera(*scene.camera, 8, 8);
+    const RenderContext ctx{scene, *accel, camera};
     PathVertex a, b;
     a.type = b.type = VertexType::Surface;
     a.bsdf = b.bsdf = vol.bsdf;
@@ -109,7 +113,7 @@ TEST(VolumeAttenuation, SegmentRuleIsSymmetricAndOnlyInside) {
     b.p = Vec3f(0.f, 0.2f, -0.5f);  // back face, normal −z
     b.ng = b.ns = Vec3f(0.f, 0.f, -1.f);
     bool attAB = false, attBA = false;
-    Rgb tAB = segmentTransmittance(a, b, attAB), tBA = segmentTransmittance(b, a, attBA);
+    Rgb tAB = segmentTransmittance(ctx, a, b, attAB), tBA = segmentTransmittance(ctx, b, a, attBA);
     EXPECT_TRUE(attAB && attBA);
     float len = glm::length(b.p - a.p);
     for (int c = 0; c < 3; ++c) {
@@ -121,7 +125,7 @@ TEST(VolumeAttenuation, SegmentRuleIsSymmetricAndOnlyInside) {
     cam.type = VertexType::Camera;
     cam.p = Vec3f(0.f, 0.f, 0.1f);  // inside the body
     cam.ng = Vec3f(0.f, 0.f, -1.f);
-    Rgb tCam = segmentTransmittance(cam, b, attAB), tCam2 = segmentTransmittance(b, cam, attBA);
+    Rgb tCam = segmentTransmittance(ctx, cam, b, attAB), tCam2 = segmentTransmittance(ctx, b, cam, attBA);
     EXPECT_TRUE(attAB && attBA);
     EXPECT_EQ(tCam, tCam2);
     EXPECT_NEAR(tCam[2], std::exp(-sigma[2] * glm::length(b.p - cam.p)), 1e-6f);
@@ -131,7 +135,7 @@ TEST(VolumeAttenuation, SegmentRuleIsSymmetricAndOnlyInside) {
     out.bsdf = vol.bsdf;
     out.p = Vec3f(0.f, 0.f, 3.f);
     out.ng = out.ns = Vec3f(0.f, 0.f, -1.f);  // faces the cube: a is seen on its front side
-    Rgb tOut = segmentTransmittance(a, out, attAB);
+    Rgb tOut = segmentTransmittance(ctx, a, out, attAB);
     EXPECT_FALSE(attAB);
     EXPECT_EQ(tOut, Rgb(1.f));
     // Towards infinity from inside: attenuating channels vanish, the others pass.
@@ -142,19 +146,51 @@ TEST(VolumeAttenuation, SegmentRuleIsSymmetricAndOnlyInside) {
     Rgb partial = sigma;
     partial[1] = 0.f;
     a.bsdf.attenuationCoeff = partial;
-    Rgb tInf = segmentTransmittance(a, inf, attAB);
+    Rgb tInf = segmentTransmittance(ctx, a, inf, attAB);
     EXPECT_TRUE(attAB);
     EXPECT_EQ(tInf, Rgb(0.f, 1.f, 0.f));
     // Thin-walled or σa = 0: not a volume.
     a.bsdf.attenuationCoeff = sigma;
     a.bsdf.thinWalled = true;
     b.bsdf.thinWalled = true;
-    segmentTransmittance(a, b, attAB);
+    segmentTransmittance(ctx, a, b, attAB);
     EXPECT_FALSE(attAB);
     a.bsdf.thinWalled = b.bsdf.thinWalled = false;
     a.bsdf.attenuationCoeff = b.bsdf.attenuationCoeff = Rgb(0.f);
-    segmentTransmittance(a, b, attAB);
+    segmentTransmittance(ctx, a, b, attAB);
     EXPECT_FALSE(attAB);
+}
+
+// A point sampled on an emitter that is itself a volume's boundary (a light sub-path's origin, a
+// next-event sample) is an end like a surface hit on it: the segment from it into the body is
+// attenuated, the segment from it outwards is not.
+TEST(VolumeAttenuation, EmitterOnAVolumeBoundaryIsAnEnd) {
+    const Rgb sigma = sigmaOf(kAttenuationColor, kAttenuationDistance);
+    Scene scene = cubeScene(sigma);
+    scene.materials[0].emission = Rgb(1.f);
+    scene.finalize();
+    ASSERT_FALSE(scene.lights().empty());
+    std::unique_ptr<Accel> accel = createAccel("embree", scene.geometry);
+    Camera camera(*scene.camera, 8, 8);
+    const RenderContext ctx{scene, *accel, camera};
+    // Light 0 is the first triangle of the +x face: its normal is +x.
+    PathVertex light;
+    light.type = VertexType::Light;
+    light.lightIndex = 0;
+    light.p = Vec3f(0.5f, 0.1f, 0.1f);
+    light.ng = light.ns = Vec3f(1.f, 0.f, 0.f);
+    PathVertex inner;
+    inner.type = VertexType::Camera;  // not a surface: only the light end can qualify
+    inner.p = Vec3f(-0.2f, 0.1f, 0.1f);
+    bool att = false;
+    Rgb t = segmentTransmittance(ctx, light, inner, att);
+    EXPECT_TRUE(att);
+    EXPECT_NEAR(t[1], std::exp(-sigma[1] * 0.7f), 1e-5f);
+    EXPECT_EQ(t, segmentTransmittance(ctx, inner, light, att));
+    inner.p = Vec3f(2.f, 0.1f, 0.1f);
+    segmentTransmittance(ctx, light, inner, att);
+    EXPECT_FALSE(att);
+    EXPECT_EQ(emitterVolumeSigma(scene, 0, light.ng, Vec3f(-1.f, 0.f, 0.f)), sigma);
 }
 
 // Index-matched glass (ior 1, roughness 0, transmission 1): every camera ray through the cube goes

@@ -68,16 +68,18 @@ float pdfLightDirectionA(const RenderContext& ctx, const PathVertex& v, const Pa
 
 namespace {
 
-/// σa of the segment from `v` towards `other` as seen from `v` (zero unless v is a surface vertex).
-Rgb endSigma(const PathVertex& v, const PathVertex& other) {
-    if (v.type != VertexType::Surface) return Rgb(0.f);
-    return volumeSigmaAt(v.bsdf, v.ng, directionTo(v, other));
+/// σa of the segment from `v` towards `other` as seen from `v`: surface vertices by their BSDF
+/// inputs, a light vertex on an area emitter by the emitter's material; zero for the rest.
+Rgb endSigma(const RenderContext& ctx, const PathVertex& v, const PathVertex& other) {
+    if (v.type == VertexType::Surface) return volumeSigmaAt(v.bsdf, v.ng, directionTo(v, other));
+    if (v.type == VertexType::Light && !v.atInfinity) return emitterVolumeSigma(ctx.scene, v.lightIndex, v.ng, directionTo(v, other));
+    return Rgb(0.f);
 }
 
 }  // namespace
 
-Rgb segmentTransmittance(const PathVertex& a, const PathVertex& b, bool& attenuates) {
-    Rgb sigmaA = endSigma(a, b), sigmaB = endSigma(b, a);
+Rgb segmentTransmittance(const RenderContext& ctx, const PathVertex& a, const PathVertex& b, bool& attenuates) {
+    Rgb sigmaA = endSigma(ctx, a, b), sigmaB = endSigma(ctx, b, a);
     attenuates = segmentAttenuates(sigmaA, sigmaB);
     if (!attenuates) return Rgb(1.f);
     float length = a.atInfinity || b.atInfinity ? kInfiniteSegment : glm::length(b.p - a.p);
@@ -147,7 +149,7 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         // The segment just traced: Beer–Lambert inside a volume (the same rule as the connections).
         // Roulette keeps looking at the BSDF weights only (as in pt).
         bool attenuates;
-        Rgb T = segmentTransmittance(out.back(), v, attenuates);
+        Rgb T = segmentTransmittance(ctx, out.back(), v, attenuates);
         if (attenuates) beta *= T;
         v.beta = beta;
         // Densities are evaluated from the vertex positions rather than taken from the sampling

@@ -40,8 +40,8 @@ void addEmission(const RenderContext& ctx, const SurfaceInteraction& si, const V
 }
 
 /// Next-event estimation at a non-delta vertex: one light sample (integrators/next_event.h),
-/// weighted against BSDF sampling, added to L. `params` (the BSDF's inputs at si) decide whether the
-/// shadow segment runs inside an absorbing volume (integrators/volume.h): the light end never does.
+/// weighted against BSDF sampling, added to L. `params` (the BSDF's inputs at si) and the emitter's
+/// material decide whether the shadow segment runs inside an absorbing volume (integrators/volume.h).
 void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, const BsdfParams& params, const SurfaceBsdf& bsdf,
                     const Vec3f& wo, const Rgb& beta, Sampler& sampler, Rgb& L) {
     NextEventSample ne;
@@ -60,10 +60,13 @@ void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, cons
     float bsdfPdfW;
     Rgb f = bsdf.evalWithPdf(wo, wi, TransportMode::Radiance, bsdfPdfW) * std::abs(glm::dot(wi, bsdf.ns()));
     if (isBlack(f) || !lightVisible(ctx.accel, si.p, si.ng, ls)) return;
+    // The shadow segment inside a volume: tested at both ends, as the traced ray to the same light
+    // point would be (integrators/volume.h).
+    if (Rgb sigmaHere = volumeSigmaAt(params, si.ng, wi), sigmaLight = emitterVolumeSigma(ctx.scene, ls.index, ls.n, -wi);
+        segmentAttenuates(sigmaHere, sigmaLight))
+        f *= segmentTransmittance(sigmaHere, sigmaLight, ls.isInfinite ? kInfiniteSegment : glm::length(ls.p - si.p));
     // A delta light (point, spot, directional) cannot be hit by BSDF sampling: light sampling is its
     // only strategy.
-    if (Rgb sigma = volumeSigmaAt(params, si.ng, wi); !isBlack(sigma))
-        f *= segmentTransmittance(sigma, Rgb(0.f), ls.isInfinite ? kInfiniteSegment : glm::length(ls.p - si.p));
     float w = ls.isDelta ? 1.f : powerHeuristic(ls.pdfW, bsdfPdfW);
     L += beta * f * ls.Le * (w / ls.pdfW);
     if (trace) [[unlikely]] {

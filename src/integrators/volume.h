@@ -20,8 +20,9 @@
 /// every strategy multiplies the same f: each must evaluate the same T for the same segment
 /// (Veach 1997, §9.2.2: unbiased for any weights that partition unity, given a common integrand).
 ///
-/// Ends that are not surfaces (the lens, a light's origin, a vertex at infinity) never qualify, but
-/// the other end can: a camera or light inside a body is attenuated up to the first surface, whose
+/// A point sampled on an area light is tested with its emitter's material like any surface end
+/// (emitterVolumeSigma). Ends that are not surfaces (the lens, point/spot lights, a vertex at
+/// infinity) never qualify, but the other end can: a camera or light inside a body is attenuated up to the first surface, whose
 /// inside (back side) it reaches. A segment that runs inside a body towards infinity (an escaped ray
 /// or a shadow ray to an infinite light) has infinite length: its attenuating channels are 0 (a
 /// closed body would have been hit from the inside). Not modelled: nested volumes (one σa per
@@ -31,6 +32,7 @@
 
 #include "core/math.h"
 #include "materials/material.h"
+#include "scene/scene.h"
 
 namespace tessera {
 
@@ -41,6 +43,21 @@ namespace tessera {
 inline Rgb volumeSigmaAt(const BsdfParams& bsdf, const Vec3f& ng, const Vec3f& wAway) {
     if (bsdf.thinWalled || isBlack(bsdf.attenuationCoeff) || !(glm::dot(wAway, ng) < 0.f)) return Rgb(0.f);
     return bsdf.attenuationCoeff;
+}
+
+/// volumeSigmaAt for a segment end that is a point sampled on an area light (a light sub-path's
+/// origin, a next-event sample): the emitter's own material decides, as it does when a traced ray
+/// hits that emitter. `n` is the light sample's surface normal (the geometric normal; zero for
+/// point, spot and infinite lights, which are never volume boundaries). KHR_materials_volume's σa
+/// and thickness are untextured factors, so the material's own BsdfParams are exact.
+inline Rgb emitterVolumeSigma(const Scene& scene, uint32_t lightIndex, const Vec3f& n, const Vec3f& wAway) {
+    if (lightIndex == kInvalidId || n == Vec3f(0.f)) return Rgb(0.f);
+    const Light& l = scene.lights().light(lightIndex);
+    uint32_t material = kInvalidId;
+    if (l.type == LightType::Triangle) material = scene.geometry.meshes[l.geomId].materialId;
+    else if (l.type == LightType::Sphere) material = scene.geometry.spheres[l.primId].materialId;
+    if (material == kInvalidId) return Rgb(0.f);
+    return volumeSigmaAt(scene.materials[material].bsdf, n, wAway);
 }
 
 /// True when a segment with these end σa (volumeSigmaAt of each end; zero for non-surface ends)
