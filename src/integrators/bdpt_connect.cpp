@@ -15,6 +15,15 @@ bool unoccluded(const RenderContext& ctx, const PathVertex& a, const PathVertex&
     return !ctx.accel.occluded(spawnShadowRay(a.p, a.offsetNormal(), b.p, b.offsetNormal()));
 }
 
+/// Multiplies a connection's contribution by the Beer–Lambert transmittance of its edge a–b, the
+/// same rule (path_vertex.h, integrators/volume.h) the random walks applied to their own segments:
+/// every strategy that builds a path sees the same f, so the MIS weights stay a partition of unity.
+void attenuateEdge(const RenderContext& ctx, Rgb& L, const PathVertex& a, const PathVertex& b) {
+    bool attenuates;
+    Rgb T = segmentTransmittance(ctx, a, b, attenuates);
+    if (attenuates) L *= T;
+}
+
 /// Fixed-capacity scratch for the MIS densities, growing on the heap only for very long paths.
 class MisScratch {
 public:
@@ -98,6 +107,7 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
         Rgb f = evalVertex(ctx, *qs, sampled, TransportMode::Importance);
         r.L = qs->beta * f * sampled.beta * cosAt(*qs, cs.wiWorld);
         if (isBlack(r.L) || !unoccluded(ctx, *qs, sampled)) return ConnectionResult{};
+        attenuateEdge(ctx, r.L, *qs, sampled);
         r.raster = cs.raster;
         pt = &sampled;
     } else if (s == 1) {
@@ -117,6 +127,7 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
         Rgb f = evalVertex(ctx, *pt, sampled, TransportMode::Radiance);
         r.L = pt->beta * f * sampled.beta * cosAt(*pt, ls.wi);
         if (isBlack(r.L) || !lightVisible(ctx.accel, pt->p, pt->ng, ls)) return ConnectionResult{};
+        attenuateEdge(ctx, r.L, *pt, sampled);
         qs = &sampled;
     } else {
         // General connection (Veach eq. 10.8): α_L · f(y) · G · f(z) · α_E.
@@ -129,6 +140,7 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
         r.L = qs->beta * evalVertex(ctx, *qs, *pt, TransportMode::Importance) * G *
               evalVertex(ctx, *pt, *qs, TransportMode::Radiance) * pt->beta;
         if (isBlack(r.L) || !unoccluded(ctx, *qs, *pt)) return ConnectionResult{};
+        attenuateEdge(ctx, r.L, *qs, *pt);
     }
     if (isBlack(r.L)) return ConnectionResult{};
     r.weight = computeWeight ? bdptStrategyWeight(ctx, light, camera, s, t, qs, pt, heuristic) : 1.f;

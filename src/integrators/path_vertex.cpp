@@ -1,6 +1,7 @@
 #include "integrators/path_vertex.h"
 
 #include "integrators/russian_roulette.h"
+#include "integrators/volume.h"
 
 namespace tessera {
 
@@ -65,6 +66,26 @@ float pdfLightDirectionA(const RenderContext& ctx, const PathVertex& v, const Pa
     return convertDensity(pdfDirW, v, next);
 }
 
+namespace {
+
+/// σa of the segment from `v` towards `other` as seen from `v`: surface vertices by their BSDF
+/// inputs, a light vertex on an area emitter by the emitter's material; zero for the rest.
+Rgb endSigma(const RenderContext& ctx, const PathVertex& v, const PathVertex& other) {
+    if (v.type == VertexType::Surface) return volumeSigmaAt(v.bsdf, v.ng, directionTo(v, other));
+    if (v.type == VertexType::Light && !v.atInfinity) return emitterVolumeSigma(ctx.scene, v.lightIndex, v.ng, directionTo(v, other));
+    return Rgb(0.f);
+}
+
+}  // namespace
+
+Rgb segmentTransmittance(const RenderContext& ctx, const PathVertex& a, const PathVertex& b, bool& attenuates) {
+    Rgb sigmaA = endSigma(ctx, a, b), sigmaB = endSigma(ctx, b, a);
+    attenuates = segmentAttenuates(sigmaA, sigmaB);
+    if (!attenuates) return Rgb(1.f);
+    float length = a.atInfinity || b.atInfinity ? kInfiniteSegment : glm::length(b.p - a.p);
+    return segmentTransmittance(sigmaA, sigmaB, length);
+}
+
 Rgb evalVertex(const RenderContext& ctx, const PathVertex& v, const PathVertex& next, TransportMode mode) {
     Vec3f w = directionTo(v, next);
     if (w == Vec3f(0.f)) return Rgb(0.f);
@@ -125,6 +146,11 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
             v.p = ray.o + (2.f * scene.lights().sceneRadius() + glm::length(ray.o - scene.lights().sceneCenter())) * v.ng;
             v.lightIndex = scene.lights().environmentIndex();
         }
+        // The segment just traced: Beer–Lambert inside a volume (the same rule as the connections).
+        // Roulette keeps looking at the BSDF weights only (as in pt).
+        bool attenuates;
+        Rgb T = segmentTransmittance(ctx, out.back(), v, attenuates);
+        if (attenuates) beta *= T;
         v.beta = beta;
         // Densities are evaluated from the vertex positions rather than taken from the sampling
         // routine: the connection code evaluates them the same way, so every strategy sees exactly

@@ -77,6 +77,13 @@ float pdfLightOriginA(const RenderContext& ctx, const PathVertex& v);
 /// vertex at infinity the emission disk's 1/(π r²) times the cosine at `next`.
 float pdfLightDirectionA(const RenderContext& ctx, const PathVertex& v, const PathVertex& next);
 
+/// Beer–Lambert transmittance of the segment between two vertices (integrators/volume.h): the one
+/// rule every strategy applies to the same segment (random walks, connections, NEE, lens
+/// connections), symmetric in `a` and `b`. Only surface vertices and points on area emitters can be
+/// ends inside a volume; a vertex at infinity makes the segment infinitely long. `attenuates` is false (and the result 1)
+/// when neither end lies on an attenuating volume's inside: callers then multiply nothing.
+Rgb segmentTransmittance(const RenderContext& ctx, const PathVertex& a, const PathVertex& b, bool& attenuates);
+
 /// The "f" of a vertex towards `next` in a connection: BSDF (adjoint for importance, with the
 /// shading correction), emitted radiance / intensity for light vertices, importance We for the camera.
 Rgb evalVertex(const RenderContext& ctx, const PathVertex& v, const PathVertex& next, TransportMode mode);

@@ -2,6 +2,7 @@
 
 #include "integrators/russian_roulette.h"
 #include "integrators/sample_trace.h"
+#include "integrators/volume.h"
 #include "materials/surface_bsdf.h"
 
 namespace tessera {
@@ -9,22 +10,33 @@ namespace tessera {
 // Why this estimator is unbiased: the path throughput β is the product of f·|cos θ|/pdf of the
 // sampled directions, the Monte Carlo estimator of each term of the path integral (Veach 1997,
 // eq. 8.19), and every path that ends on an emitter contributes β·Le exactly once. Russian
-// roulette divides by the survival probability (integrators/russian_roulette.h).
+// roulette divides by the survival probability (integrators/russian_roulette.h). A segment inside
+// an absorbing volume multiplies β by its transmittance (integrators/volume.h): part of f.
 Rgb PtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& sampler, SplatSink&) const {
     const Scene& scene = ctx.scene;
     Ray ray = ctx.camera.generateRay(raster, sampler.get2D());
     Rgb L(0.f), beta(1.f);
     float rrScale = 1.f;  // what Russian roulette looks at (integrators/russian_roulette.h)
+    Rgb sigmaLeave(0.f);  // σa of the traced segment as seen from the vertex it left (integrators/volume.h)
+    Vec3f prevP = ray.o;
     for (int depth = 0;; ++depth) {
         Hit hit;
         // Camera rays follow their neighbours (tiles in pixel order): the coherent kernel.
         if (!(depth == 0 ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) {
             // An escaping ray sees the environment (zero without one).
-            if (scene.lights().hasEnvironment()) L += beta * scene.lights().environmentLe(glm::normalize(ray.d));
+            if (scene.lights().hasEnvironment()) {
+                if (!isBlack(sigmaLeave)) beta *= segmentTransmittance(sigmaLeave, Rgb(0.f), kInfiniteSegment);
+                L += beta * scene.lights().environmentLe(glm::normalize(ray.d));
+            }
             break;
         }
         SurfaceInteraction si = scene.interaction(ray, hit);
         Vec3f wo = -glm::normalize(ray.d);
+        const BsdfParams params = scene.bsdfParams(si, ctx.camera.pixelFootprint(si.p));
+        // Russian roulette keeps looking at the BSDF weights only (rrScale): a path through index-
+        // matched glass stays deterministic, and absorption ends paths by driving β to zero.
+        if (Rgb sigmaArrive = volumeSigmaAt(params, si.ng, wo); segmentAttenuates(sigmaLeave, sigmaArrive))
+            beta *= segmentTransmittance(sigmaLeave, sigmaArrive, glm::length(si.p - prevP));
         if (si.lightIndex != kInvalidId) L += beta * scene.lights().emitted(si.lightIndex, si.ng, wo, si.bary);
         SampleTrace* trace = ctx.trace;
         if (trace) [[unlikely]] {
@@ -34,7 +46,7 @@ Rgb PtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler&
         }
         if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;
 
-        SurfaceBsdf bsdf(scene.bsdfParams(si, ctx.camera.pixelFootprint(si.p)), si.ns, si.ng);
+        SurfaceBsdf bsdf(params, si.ns, si.ng);
         SurfaceBsdfSample bs;
         float uLobe = sampler.get1D();
         Vec2f uDir = sampler.get2D();
@@ -47,6 +59,8 @@ Rgb PtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler&
         if (isBlack(beta)) break;
         if (depth >= kRouletteMinDepth && !survivesRoulette(rrScale, beta, sampler, trace)) break;
         ray = spawnRay(si.p, si.ng, bs.wiWorld);
+        sigmaLeave = volumeSigmaAt(params, si.ng, bs.wiWorld);
+        prevP = si.p;
     }
     return L;
 }

@@ -4,6 +4,7 @@
 #include "integrators/next_event.h"
 #include "integrators/russian_roulette.h"
 #include "integrators/sample_trace.h"
+#include "integrators/volume.h"
 #include "materials/surface_bsdf.h"
 
 namespace tessera {
@@ -39,9 +40,10 @@ void addEmission(const RenderContext& ctx, const SurfaceInteraction& si, const V
 }
 
 /// Next-event estimation at a non-delta vertex: one light sample (integrators/next_event.h),
-/// weighted against BSDF sampling, added to L.
-void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, const SurfaceBsdf& bsdf, const Vec3f& wo,
-                    const Rgb& beta, Sampler& sampler, Rgb& L) {
+/// weighted against BSDF sampling, added to L. `params` (the BSDF's inputs at si) and the emitter's
+/// material decide whether the shadow segment runs inside an absorbing volume (integrators/volume.h).
+void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, const BsdfParams& params, const SurfaceBsdf& bsdf,
+                    const Vec3f& wo, const Rgb& beta, Sampler& sampler, Rgb& L) {
     NextEventSample ne;
     if (!sampleNextEvent(ctx.scene.lights(), si.p, si.ng, wo, sampler, ne)) return;
     const LightSample& ls = ne.light;
@@ -58,6 +60,11 @@ void addLightSample(const RenderContext& ctx, const SurfaceInteraction& si, cons
     float bsdfPdfW;
     Rgb f = bsdf.evalWithPdf(wo, wi, TransportMode::Radiance, bsdfPdfW) * std::abs(glm::dot(wi, bsdf.ns()));
     if (isBlack(f) || !lightVisible(ctx.accel, si.p, si.ng, ls)) return;
+    // The shadow segment inside a volume: tested at both ends, as the traced ray to the same light
+    // point would be (integrators/volume.h).
+    if (Rgb sigmaHere = volumeSigmaAt(params, si.ng, wi), sigmaLight = emitterVolumeSigma(ctx.scene, ls.index, ls.n, -wi);
+        segmentAttenuates(sigmaHere, sigmaLight))
+        f *= segmentTransmittance(sigmaHere, sigmaLight, ls.isInfinite ? kInfiniteSegment : glm::length(ls.p - si.p));
     // A delta light (point, spot, directional) cannot be hit by BSDF sampling: light sampling is its
     // only strategy.
     float w = ls.isDelta ? 1.f : powerHeuristic(ls.pdfW, bsdfPdfW);
@@ -95,7 +102,9 @@ void addEscapedEnvironment(const RenderContext& ctx, const Vec3f& wLight, const 
 //    The environment is one more emitter: an escaping BSDF ray finds it, light sampling picks its
 //    directions by luminance; delta lights (point, spot, directional) only light sampling finds.
 //  * Throughput β is the product of f·|cos|/pdf of the sampled directions: the standard
-//    Monte Carlo estimator of the path-integral terms (Veach 1997 eq. 8.19).
+//    Monte Carlo estimator of the path-integral terms (Veach 1997 eq. 8.19). A segment inside an
+//    absorbing volume multiplies β (traced) or the light sample (shadow segment) by the same
+//    transmittance (integrators/volume.h): part of f, so both strategies still share one integrand.
 //  * Russian roulette divides β by the survival probability (integrators/russian_roulette.h).
 Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& sampler, SplatSink&) const {
     const Scene& scene = ctx.scene;
@@ -106,16 +115,24 @@ Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampl
     bool deltaBounce = true;     // the previous vertex was the camera or a delta BSDF
     float prevPdfW = 0.f;        // solid-angle density of the BSDF sample that produced `ray`
     Vec3f prevP = ray.o;
+    Vec3f prevSurfaceP = ray.o;  // the previous vertex itself (prevP is offset off its surface)
+    Rgb sigmaLeave(0.f);         // σa of the traced segment as seen from the vertex it left (integrators/volume.h)
 
     for (int depth = 0;; ++depth) {
         Hit hit;
         // Camera rays follow their neighbours (tiles in pixel order): the coherent kernel.
         if (!(depth == 0 ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) {
-            if (scene.lights().hasEnvironment()) addEscapedEnvironment(ctx, glm::normalize(ray.d), beta, deltaBounce, prevPdfW, L);
+            if (scene.lights().hasEnvironment()) {
+                if (!isBlack(sigmaLeave)) beta *= segmentTransmittance(sigmaLeave, Rgb(0.f), kInfiniteSegment);
+                addEscapedEnvironment(ctx, glm::normalize(ray.d), beta, deltaBounce, prevPdfW, L);
+            }
             break;
         }
         SurfaceInteraction si = scene.interaction(ray, hit);
         Vec3f wo = -glm::normalize(ray.d);
+        const BsdfParams params = scene.bsdfParams(si, ctx.camera.pixelFootprint(si.p));
+        if (Rgb sigmaArrive = volumeSigmaAt(params, si.ng, wo); segmentAttenuates(sigmaLeave, sigmaArrive))
+            beta *= segmentTransmittance(sigmaLeave, sigmaArrive, glm::length(si.p - prevSurfaceP));
         SampleTrace* trace = ctx.trace;
         if (trace) [[unlikely]] {
             trace->vertex(depth, si.p, si.ng, si.materialId, beta);
@@ -123,8 +140,8 @@ Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampl
         if (si.lightIndex != kInvalidId) addEmission(ctx, si, wo, beta, deltaBounce, prevPdfW, prevP, L);
         if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;
 
-        SurfaceBsdf bsdf(scene.bsdfParams(si, ctx.camera.pixelFootprint(si.p)), si.ns, si.ng);
-        if (!bsdf.isDelta()) addLightSample(ctx, si, bsdf, wo, beta, sampler, L);
+        SurfaceBsdf bsdf(params, si.ns, si.ng);
+        if (!bsdf.isDelta()) addLightSample(ctx, si, params, bsdf, wo, beta, sampler, L);
 
         // Continue the path by BSDF sampling.
         SurfaceBsdfSample bs;
@@ -146,6 +163,8 @@ Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampl
         if (depth >= kRouletteMinDepth && !survivesThroughputRoulette(maxComponent(beta) * etaScale, beta, sampler, trace)) break;
         ray = spawnRay(si.p, si.ng, bs.wiWorld);
         prevP = ray.o;
+        prevSurfaceP = si.p;
+        sigmaLeave = volumeSigmaAt(params, si.ng, bs.wiWorld);
     }
     return L;
 }
