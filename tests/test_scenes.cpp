@@ -54,6 +54,7 @@ const ShippedScene kScenes[] = {
     {"furnace", "scenes/furnace/furnace.gltf", false, 4, true},
     {"webxr-controllers", "scenes/webxr/webxr-controllers.gltf", false, 4, true, "webxr-input-profiles/oculus-touch-v3/left.glb"},
     {"webxr-lineup", "scenes/webxr/webxr-lineup.gltf", false, 4, false, "webxr-input-profiles/magicleap-two/none.glb"},
+    {"webxr-hdri", "scenes/webxr/webxr-hdri.gltf", false, 4, false, "webxr-input-profiles/hp-mixed-reality/left.glb"},
     {"spot-light", "scenes/spot-light/spot-light.gltf", false, 4, false},
     {"hdri-spheres", "scenes/hdri-spheres/hdri-spheres.gltf", false, 4, false, "pmndrs-hdri/sky.exr"},
     {"hdri-sun", "scenes/hdri-spheres/hdri-sun.gltf", false, 4, false, "pmndrs-hdri/sky.exr"},

@@ -80,6 +80,7 @@ SCENES = {
     "furnace": ("scenes/furnace/furnace.gltf", "64x64", "bdpt", 32, "ptnee", 64),
     "webxr-controllers": ("scenes/webxr/webxr-controllers.gltf", "128x96", "bdpt", 32, "ptnee", 64),
     "webxr-lineup": ("scenes/webxr/webxr-lineup.gltf", "160x90", "bdpt", 32, "ptnee", 64),
+    "webxr-hdri": ("scenes/webxr/webxr-hdri.gltf", "128x96", "bdpt", 32, "ptnee", 64),
     "spot-light": ("scenes/spot-light/spot-light.gltf", "128x96", "bdpt", 256, "ptnee", 512),
     "hdri-spheres": ("scenes/hdri-spheres/hdri-spheres.gltf", "128x96", "bdpt", 256, "ptnee", 512),
     "hdri-sun": ("scenes/hdri-spheres/hdri-sun.gltf", "128x96", "bdpt", 256, "ptnee", 512),
@@ -110,6 +111,8 @@ WHY = {
                          "sample every path",
     "webxr-lineup": "third-party glTF assets, two of them emissive, one with a transmissive part: bdpt and ptnee "
                     "both sample every path (the transmissive part's caustics only through BSDF sampling in ptnee)",
+    "webxr-hdri": "third-party glTF assets lit only by an HDRI (plus the emissive LED texture): ptnee and bdpt "
+                  "importance-sample the environment; bdpt's light sub-paths also start at it",
     "spot-light": "spot and directional lights only (deltas): pt sees black; ptnee reaches every path through "
                   "the glossy sphere by BSDF sampling, bdpt also by light tracing",
     "hdri-spheres": "environment only (a small sun holds 2/3 of the light): ptnee and bdpt sample it by "

@@ -599,6 +599,27 @@ def webxr_lineup():
     return g
 
 
+WEBXR_HDRI_ASSET = "pmndrs-hdri/%s.exr"
+
+
+def webxr_hdri(hdri="venice", rotation=0.0):
+    g = Gltf("An HP Reverb G2 controller (emissive-textured LEDs) and a Valve Index controller (WebXR "
+             "GLBs: base-colour, metallic-roughness and normal maps) on a grey floor, lit only by the "
+             "Poly Haven '%s' HDRI (TESSERA_environment, asset %s; fetched by tools/fetch_assets.sh, "
+             "not committed)." % (hdri, WEBXR_HDRI_ASSET % hdri))
+    floor = g.material("floor", base=(0.35, 0.35, 0.35), specular=0.0)
+    g.quads("floor", [floor_quad(4.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
+    k = 10.0
+    webxr_controller(g, "hp-mixed-reality/left.glb", (-0.7, 0.0, 0.1), 35.0, k)
+    webxr_controller(g, "valve-index/right.glb", (0.65, 0.0, -0.1), 120.0, k)
+    g.environment(asset=WEBXR_HDRI_ASSET % hdri, intensity=1.0, rotation=rotation)
+    eye, target = (0.0, 1.7, 4.3), (0.0, 0.4, 0.0)
+    g.camera("camera", yfov=math.radians(36.0), aspect=4.0 / 3.0, znear=0.01,
+             translation=eye, rotation=look_at_rotation(eye, target))
+    g.render((320, 240), 64, -1, 0, "ptnee")
+    return g
+
+
 # --------------------------------------------------------------------------
 def readme(entries):
     lines = [
@@ -680,6 +701,7 @@ SCENE_LIST = [
     ("furnace", "furnace", furnace, False),
     ("webxr", "webxr-controllers", webxr_controllers, True),
     ("webxr", "webxr-lineup", webxr_lineup, True),
+    ("webxr", "webxr-hdri", lambda: webxr_hdri(), True),
     ("spot-light", "spot-light", spot_light, True),
     ("hdri-spheres", "hdri-spheres", lambda: hdri_spheres(True), True),
     ("hdri-spheres", "hdri-sun", lambda: hdri_spheres(False), True),
