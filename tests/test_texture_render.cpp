@@ -298,11 +298,12 @@ TEST(NormalMap, GltfNormalTextureWithGeneratedTangentsFollowsTheImageAxes) {
 }
 
 // Every integrator sees the same textures: in a closed sphere (seen from inside) whose surface has
-// a checkerboard albedo, a random-tilt normal map (MikkTSpace tangents) and uniform emission, pt,
+// a checkerboard albedo, a random-tilt normal map (MikkTSpace tangents) and a textured emission
+// (emission varying over every light triangle, each selected by its textured power), pt,
 // lt and bdpt agree with ptnee bin by bin (4×4-pixel bins, 16 independent batches each: z from the
 // batch variances, Šidák-corrected over bins and channels). The MIP level is a function of the hit
 // point (Camera::pixelFootprint), so camera and light sub-paths read the same filtered values.
-TEST(TexturedAgreement, EveryIntegratorAgreesInATexturedNormalMappedFurnace) {
+TEST(TexturedAgreement, EveryIntegratorAgreesInATexturedNormalMappedEmissiveTexturedFurnace) {
     Image albedo = test::imageFromTexels(8, 4, [](int x, int y) { return (x + y) % 2 ? Vec4f(0.85f, 0.5f, 0.3f, 1.f) : Vec4f(0.3f, 0.6f, 0.75f, 1.f); });
     uint32_t state = 2024u;
     auto uniform = [&] {
@@ -319,6 +320,10 @@ TEST(TexturedAgreement, EveryIntegratorAgreesInATexturedNormalMappedFurnace) {
     m.bsdf.specular = 0.f;
     m.emission = Rgb(0.5f);
     m.doubleSided = true;
+    Image glow = test::imageFromTexels(6, 3, [](int x, int y) {
+        return (x + 2 * y) % 3 == 0 ? Vec4f(1.f, 0.6f, 0.3f, 1.f) : Vec4f(0.15f, 0.3f, 0.9f, 1.f);
+    });
+    m.textures.emissive.image = &glow;
     m.textures.baseColor.image = &albedo;
     m.textures.normal.image = &bumps;
     scene.materials.push_back(m);
