@@ -96,15 +96,7 @@ namespace {
 
 /// A Lambertian square (side 2·half) in the plane y = 0 facing +y, seen head-on from above.
 Scene planeUnderEnvironment(Rgb albedo, const Image* image, float half = 3.f) {
-    Scene scene;
-    Material m;
-    m.bsdf.baseColor = albedo;
-    scene.materials.push_back(m);
-    TriangleMesh quad;
-    quad.name = "plane";
-    quad.positions = {{-half, 0.f, -half}, {half, 0.f, -half}, {half, 0.f, half}, {-half, 0.f, half}};
-    quad.triangles = {{0, 2, 1}, {0, 3, 2}};  // winding gives +y
-    scene.geometry.meshes.push_back(quad);
+    Scene scene = test::diffusePlaneScene(albedo, half);
     EnvironmentDesc env;
     env.image = image;
     scene.environment = env;

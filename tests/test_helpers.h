@@ -115,6 +115,21 @@ inline Image imageFromTexels(int width, int height, const std::function<Vec4f(in
     return img;
 }
 
+/// A Lambertian square (side 2·half) in the plane y = 0 facing +y: one material, one mesh; no
+/// camera, lights or environment yet.
+inline Scene diffusePlaneScene(Rgb albedo, float half) {
+    Scene scene;
+    Material m;
+    m.bsdf.baseColor = albedo;
+    scene.materials.push_back(m);
+    TriangleMesh quad;
+    quad.name = "plane";
+    quad.positions = {{-half, 0.f, -half}, {half, 0.f, -half}, {half, 0.f, half}, {-half, 0.f, half}};
+    quad.triangles = {{0, 2, 1}, {0, 3, 2}};  // winding gives +y
+    scene.geometry.meshes.push_back(quad);
+    return scene;
+}
+
 /// A closed sphere (radius R = 1) seen from inside, camera at the origin looking down −z.
 inline Scene closedSphere(Rgb albedo, Rgb Le, bool asMesh, const std::vector<PointLightDesc>& pointLights = {},
                    float apertureRadius = 0.f) {

@@ -20,15 +20,7 @@ namespace {
 
 /// A Lambertian square of side 2·half in the plane y = 0, facing +y, seen from straight above.
 Scene diffusePlane(Rgb albedo, float half) {
-    Scene scene;
-    Material m;
-    m.bsdf.baseColor = albedo;
-    scene.materials.push_back(m);
-    TriangleMesh quad;
-    quad.name = "plane";
-    quad.positions = {{-half, 0.f, -half}, {half, 0.f, -half}, {half, 0.f, half}, {-half, 0.f, half}};
-    quad.triangles = {{0, 2, 1}, {0, 3, 2}};  // winding gives +y
-    scene.geometry.meshes.push_back(quad);
+    Scene scene = test::diffusePlaneScene(albedo, half);
     CameraDesc cam;
     cam.cameraToWorld = glm::inverse(glm::lookAt(Vec3f(0.f, 3.f, 0.f), Vec3f(0.f), Vec3f(0.f, 0.f, -1.f)));
     cam.yfov = 0.9f;
