@@ -32,10 +32,10 @@ enum class MisHeuristic { Balance, Power };
 ///     w_s = p_s^β / Σ_i p_i^β = 1 / (1 + Σ_{i≠s} (p_i / p_s)^β),
 /// and each (p_i / p_s) is a running product of pdfRevA/pdfFwdA ratios walking away from the
 /// connection on either sub-path. Terms whose strategy would connect at a delta vertex are left out
-/// (such a strategy has density 0); delta densities are stored as 0 and remapped to 1, since the
-/// same delta factor appears in both densities of a ratio (Veach 1997, §10.3.5; pbrt's remap0).
-/// The sub-paths store a delta scattering's unit weight converted to area (path_vertex.h's
-/// deltaDensityA), so only a density that is truly zero is remapped.
+/// (such a strategy has density 0). A density after a delta scattering is the delta's unit weight
+/// converted to area (path_vertex.h's deltaDensityA): the same delta factor appears in both
+/// densities of a ratio and cancels (Veach 1997, §10.3.5), its |cos|/d² does not. A density of 0
+/// (a vertex behind a one-sided emitter) is remapped to 1 (pbrt's remap0).
 ///
 /// Strategy s = 1 samples x0 by next-event estimation, not by the light sub-path's origin
 /// sampling that strategies s ≥ 2 use: for a sphere light the visible cone from x1, whose area
