@@ -257,7 +257,7 @@ int runBatch(const BatchArgs& a) {
         rec.seconds = secondsSince(jobStart);
         if (rec.status == "failed") printError(file.path + ": " + job.label() + ": " + rec.error);
         cache.release(job);
-        stopped = interruptFlag().load() || (a.failFast && rec.status == "failed");
+        stopped = interruptFlag().load() || rec.status == "interrupted" || (a.failFast && rec.status == "failed");
     }
 
     int counts[4] = {0, 0, 0, 0};  // ok, failed, interrupted, not run
@@ -278,7 +278,7 @@ int runBatch(const BatchArgs& a) {
     if (!a.jsonSummary.empty()) writeSummaryFile(a.jsonSummary, summary);
     // Error texts may quote bytes from scene files: invalid UTF-8 is replaced, never thrown on.
     if (a.json) std::cout << summary.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << std::endl;
-    if (interruptFlag().load()) return 130;
+    if (interruptFlag().load() || counts[2] > 0) return 130;
     return counts[1] > 0 ? 1 : 0;
 }
 

@@ -55,6 +55,8 @@ public:
         } catch (const json::parse_error& e) {
             // e.byte is one past the offending character.
             fail("", lineColumn(text, e.byte > 0 ? e.byte - 1 : 0) + ": not valid JSON (" + syntaxProblem(e) + ")");
+        } catch (const json::exception& e) {  // e.g. a number too large for a double (out_of_range.406)
+            fail("", "not valid JSON (" + syntaxProblem(e) + ")");
         }
         if (!root.is_object()) fail("", "must be a JSON object {\"defaults\": {...}, \"jobs\": [...]}");
         for (const auto& [key, value] : root.items())
@@ -108,12 +110,17 @@ private:
         throw InputError(path_ + ": " + (pointer.empty() ? "" : pointer + ": ") + problem);
     }
 
-    static std::string syntaxProblem(const json::parse_error& e) {
-        // nlohmann's message: "[json.exception.parse_error.101] parse error at line 1, column 5: syntax error while
-        // parsing value - invalid literal; last read: 'x'": keep what follows the position.
+    static std::string syntaxProblem(const json::exception& e) {
+        // nlohmann's messages: "[json.exception.parse_error.101] parse error at line 1, column 5: syntax error while
+        // parsing value - invalid literal; last read: 'x'" (keep what follows the position), or
+        // "[json.exception.out_of_range.406] number overflow parsing '1e999'" (keep what follows the tag).
         std::string what = e.what();
-        size_t colon = what.find(": ", what.find("parse error"));
-        return colon == std::string::npos ? what : what.substr(colon + 2);
+        if (size_t at = what.find("parse error"); at != std::string::npos) {
+            size_t colon = what.find(": ", at);
+            return colon == std::string::npos ? what : what.substr(colon + 2);
+        }
+        size_t tag = what.find("] ");
+        return tag == std::string::npos ? what : what.substr(tag + 2);
     }
 
     static std::string stem(const std::string& path) { return std::filesystem::path(path).stem().string(); }
