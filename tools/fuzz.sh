@@ -47,7 +47,9 @@ cd "$build"
 for t in "${targets[@]}"; do
   mkdir -p "crashes-$t"
   echo "== $(fuzz_target "$t"), ${seconds} s"
-  UBSAN_OPTIONS=halt_on_error=1 nice "./tests/fuzz/$(fuzz_target "$t")" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
+  dict=()
+  [ "$t" = batch ] && dict=(-dict="$root/tests/fuzz/jobs.dict")
+  UBSAN_OPTIONS=halt_on_error=1 nice "./tests/fuzz/$(fuzz_target "$t")" "${dict[@]}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
     -artifact_prefix="$build/crashes-$t/" "corpus-$t" 2>&1 | tee "fuzz-$t.log" | grep -E "^#[0-9]+ +(DONE|pulse)|ERROR|SUMMARY" || true
   tail -n 3 "fuzz-$t.log"
   echo "crash inputs: $(ls "crashes-$t" | wc -l)"
