@@ -14,6 +14,7 @@ Runner addCompareCommand(CLI::App& app);
 Runner addValidateAccelCommand(CLI::App& app);
 Runner addBenchAccelCommand(CLI::App& app);
 Runner addViewCommand(CLI::App& app);
+Runner addBatchCommand(CLI::App& app);
 
 /// Prints "tessera: error: MESSAGE" on one line to stderr.
 void printError(const std::string& message);
