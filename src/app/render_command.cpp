@@ -25,6 +25,7 @@
 #include "render/checkpoint.h"
 #include "render/debug_pixel.h"
 #include "render/interrupt.h"
+#include "render/partial.h"
 #include "render/renderer.h"
 #include "scene/gltf_loader.h"
 
@@ -41,6 +42,7 @@ struct RenderArgs : SceneOptions {
     double checkpointSeconds = -1.0;  ///< < 0: no checkpoints
     bool resume = false;
     uint64_t stopAfterTiles = 0;      ///< test hook (hidden option)
+    std::string samples;              ///< --samples A:B: render that range into a partial
 };
 
 
@@ -220,6 +222,44 @@ private:
 };
 
 
+/// `--samples A:B`: renders samples [A, B) of every pixel into a partial (render/partial.h) at -o
+/// (default out/<scene>_A-B.partial) for `tessera merge`; no image.
+int runSampleRange(const RenderArgs& a, const RenderSettings& s, const RenderContext& ctx, const Integrator& integrator,
+                   const Accel& accel) {
+    SampleRange range = parseSampleRange(a.samples, "--samples");
+    if (a.timeLimit > 0 || a.resume || a.checkpointSeconds >= 0 || !a.bdptStrategies.empty())
+        throw InputError("--samples renders a fixed sample range: not with --time, --checkpoint, --resume or --bdpt-strategies");
+    if (range.end > uint32_t(s.spp))
+        throw InputError("--samples " + range.str() + " goes past the render's " + std::to_string(s.spp) +
+                         " spp (give the total with --spp N)");
+    std::string path = a.output.empty() ? "out/" + stem(a.scene) + "_" + std::to_string(range.begin) + "-" +
+                                              std::to_string(range.end) + ".partial"
+                                        : a.output;
+    RenderOptions ro{.spp = int(range.end), .firstSample = range.begin, .threads = a.threads, .seed = s.seed};
+    InterruptGuard guard;
+    interruptFlag().store(false);
+    ro.cancel = &interruptFlag();
+    ProgressReporter progress("render " + stem(a.scene) + " samples " + range.str(),
+                              uint64_t(s.width) * uint64_t(s.height) * (range.end - range.begin), 0.0, a.quiet);
+    ro.progress = &progress;
+    Film film(s.width, s.height);
+    RenderStats stats = renderImage(ctx, integrator, film, ro);
+    if (stats.interrupted) {
+        progress.done("interrupted: no partial written");
+        return 130;
+    }
+    CheckpointHeader header = checkpointHeader(a, s, *ctx.scene.camera, integrator, ro.tileSize);
+    header.push_back({"scene", a.scene});
+    header.push_back({"accel", std::string(accel.name())});
+    writePartial(path, header, range, film, stats);
+    progress.done("samples " + range.str() + " in " + formatDuration(stats.seconds) + " -> " + path);
+    if (a.json)
+        std::cout << nlohmann::json{{"scene", a.scene}, {"samples", range.str()}, {"partial", path}, {"seconds", stats.seconds},
+                                    {"nonfinite_dropped", stats.nonFiniteDropped}}.dump()
+                  << std::endl;
+    return 0;
+}
+
 double samplesPerSecond(const RenderStats& stats) { return stats.seconds > 0 ? double(stats.samples) / stats.seconds : 0.0; }
 
 /// The closing progress line, and the warning that names the first non-finite sample.
@@ -280,6 +320,7 @@ int runRender(const RenderArgs& a) {
     Camera camera(*scene.camera, s.width, s.height);
     RenderContext ctx{scene, *accel, camera, s.maxDepth};
     if (!a.debugPixel.empty()) return runDebugPixel(a, ctx, *integrator, s);
+    if (!a.samples.empty()) return runSampleRange(a, s, ctx, *integrator, *accel);
 
     Film film(s.width, s.height);
     RenderOptions ro{.spp = s.spp, .timeLimitSeconds = a.timeLimit, .threads = a.threads, .seed = s.seed};
@@ -369,6 +410,9 @@ Runner addRenderCommand(CLI::App& app) {
     cmd->add_option("--debug-pixel", a->debugPixel,
                     "replay one camera sample x,y,s exactly as the render takes it, tracing its rays, hits, splats and the "
                     "first non-finite value on stderr; prints the radiance (or JSON with --json) and writes no image");
+    cmd->add_option("--samples", a->samples,
+                    "render only sample indices A:B (A inclusive, B exclusive, B <= --spp) of every pixel into a partial "
+                    "(-o, default out/<scene>_A-B.partial); 'tessera merge' joins partials into the image");
     cmd->add_option("--stop-after-tiles", a->stopAfterTiles, "test hook: behave as if interrupted after this many tiles")
         ->group("");
     cmd->add_flag("--quiet", a->quiet, "no progress output");
