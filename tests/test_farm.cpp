@@ -44,14 +44,15 @@ TEST(Farm, ScriptsRenderTheSameBitsAndRerunsSubmitOnlyMissingRanges) {
     fs::permissions(sbatch, fs::perms::owner_all);
     const std::string scene = tessera::test::sourcePath("scenes/cornell-box/cornell-box.gltf");
     const std::string renderOpts = " --resolution 40x30 --seed 5 --integrator bdpt --max-depth 4";
-    const std::string farm = std::string(TESSERA_BINARY) + " farm '" + scene + "' --parts 4 --spp 10 --out '" + out.string() +
-                             "' --sbatch '" + sbatch.string() + "' --cpus-per-task 1 --json -- " + renderOpts;
+    const std::string farmBase = std::string(TESSERA_BINARY) + " farm '" + scene + "' --parts 4 --spp 10 --out '" + out.string() +
+                                 "' --sbatch '" + sbatch.string() + "' --cpus-per-task 1 --json";
+    const std::string farm = farmBase + " -- " + renderOpts;
     std::string text;
     ASSERT_EQ(run(farm, &text), 0) << text;
     EXPECT_NE(text.find("\"array_job\":\"101\""), std::string::npos) << text;
     EXPECT_NE(text.find("\"merge_job\":\"102\""), std::string::npos) << text;
     std::string submitted = slurp(log);
-    EXPECT_NE(submitted.find("--parsable  " + (out / "render.sbatch").string()), std::string::npos) << submitted;
+    EXPECT_NE(submitted.find("--parsable " + (out / "render.sbatch").string()), std::string::npos) << submitted;
     EXPECT_NE(submitted.find("--dependency=afterok:101 " + (out / "merge.sbatch").string()), std::string::npos) << submitted;
     std::string render = slurp(out / "render.sbatch");
     EXPECT_NE(render.find("#SBATCH --array=0,1,2,3\n"), std::string::npos) << render;
@@ -60,7 +61,7 @@ TEST(Farm, ScriptsRenderTheSameBitsAndRerunsSubmitOnlyMissingRanges) {
     // Slurm runs task 1 (samples 2:5): a re-run submits only the three others.
     ASSERT_EQ(run("env SLURM_ARRAY_TASK_ID=1 bash '" + (out / "render.sbatch").string() + "'", &text), 0) << text;
     ASSERT_TRUE(fs::exists(out / "part_2-5.partial"));
-    ASSERT_EQ(run(farm + " --dry-run", &text), 0) << text;
+    ASSERT_EQ(run(farmBase + " --dry-run -- " + renderOpts, &text), 0) << text;
     EXPECT_NE(text.find("#SBATCH --array=0,2,3\n"), std::string::npos) << text;
     ASSERT_EQ(run(farm, &text), 0) << text;
     EXPECT_NE(slurp(out / "render.sbatch").find("#SBATCH --array=0,2,3\n"), std::string::npos);
