@@ -53,7 +53,7 @@ TEST(Farm, ScriptsRenderTheSameBitsAndRerunsSubmitOnlyMissingRanges) {
     EXPECT_NE(text.find("\"merge_job\":\"102\""), std::string::npos) << text;
     std::string submitted = slurp(log);
     EXPECT_NE(submitted.find("--parsable " + (out / "render.sbatch").string()), std::string::npos) << submitted;
-    EXPECT_NE(submitted.find("--dependency=afterok:101 " + (out / "merge.sbatch").string()), std::string::npos) << submitted;
+    EXPECT_NE(submitted.find("--dependency=afterok:101 --kill-on-invalid-dep=yes " + (out / "merge.sbatch").string()), std::string::npos) << submitted;
     std::string render = slurp(out / "render.sbatch");
     EXPECT_NE(render.find("#SBATCH --array=0,1,2,3\n"), std::string::npos) << render;
     EXPECT_NE(render.find("RANGES=( 0:2 2:5 5:7 7:10 )"), std::string::npos) << render;

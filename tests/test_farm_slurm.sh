@@ -26,25 +26,40 @@ export SLURM_CONF="$work/slurm/slurm.conf" PATH="$PATH:/usr/sbin"
 
 scene="$src/scenes/cornell-box/cornell-box.gltf"
 opts=(--resolution 48x36 --seed 9 --integrator bdpt --max-depth 5)
-json="$("$tessera" farm "$scene" --parts 4 --spp 12 --out "$work/farm" --cpus-per-task 1 --json -- "${opts[@]}")" ||
-  { echo "FAIL: tessera farm" >&2; exit 1; }
-echo "$json"
-merge_job="$(python3 -c 'import json,sys; print(json.loads(sys.argv[1])["merge_job"])' "$json")"
-array_job="$(python3 -c 'import json,sys; print(json.loads(sys.argv[1])["array_job"])' "$json")"
-[ -n "$array_job" ] || { echo "FAIL: no array job submitted" >&2; exit 1; }
+farm() { "$tessera" farm "$scene" --parts 4 --spp 12 --out "$work/farm" --cpus-per-task 1 --json -- "${opts[@]}"; }
+field() { python3 -c 'import json,sys; print(json.loads(sys.argv[1])[sys.argv[2]])' "$1" "$2"; }
+wait_gone() {  # job id: wait until it has left the queue (at most 120 s)
+  local i
+  for i in $(seq 240); do
+    [ -z "$(squeue -h -j "$1" 2>/dev/null)" ] && return 0
+    sleep 0.5
+  done
+  echo "FAIL: job $1 still queued after 120 s" >&2; squeue >&2; exit 1
+}
 
-# Wait for the merge job to leave the queue (at most 150 s), then for its image.
-for i in $(seq 300); do
-  [ -z "$(squeue -h -j "$merge_job" 2>/dev/null)" ] && break
-  sleep 0.5
-done
+# First run: task 1 (samples 3:6) fails (its output path is a directory), so the merge job is
+# cancelled and no image appears.
+mkdir -p "$work/farm/part_3-6.partial"
+json="$(farm)" || { echo "FAIL: tessera farm" >&2; exit 1; }
+echo "$json"
+[ -n "$(field "$json" array_job)" ] || { echo "FAIL: no array job submitted" >&2; exit 1; }
+wait_gone "$(field "$json" array_job)"
+wait_gone "$(field "$json" merge_job)"
 merged="$work/farm/cornell-box.exr"
+[ -f "$merged" ] && { echo "FAIL: the merge ran although task 1 failed" >&2; exit 1; }
+[ "$(ls "$work"/farm/part_*.partial -d | wc -l)" = 4 ] || { echo "FAIL: expected 3 partials and the blocker" >&2; exit 1; }
+
+# Re-run after the failure: only 3:6 is submitted; the merge then writes the image.
+rmdir "$work/farm/part_3-6.partial"
+json="$(farm)" || { echo "FAIL: tessera farm (re-run)" >&2; exit 1; }
+echo "$json"
+[ "$(field "$json" submitted)" = "['3:6']" ] || { echo "FAIL: the re-run should submit only 3:6" >&2; exit 1; }
+wait_gone "$(field "$json" merge_job)"
 if [ ! -f "$merged" ]; then
-  echo "FAIL: no merged image after the merge job $merge_job; logs:" >&2
+  echo "FAIL: no merged image after the merge job; logs:" >&2
   tail -n 20 "$work"/farm/logs/* "$work/slurm/log/slurmctld.log" >&2
   exit 1
 fi
-ls "$work"/farm/part_*.partial | wc -l | grep -qx 4 || { echo "FAIL: expected 4 partials" >&2; exit 1; }
 
 "$tessera" render "$scene" --quiet --no-png --spp 12 "${opts[@]}" -o "$work/single.exr" || { echo "FAIL: single render" >&2; exit 1; }
 # Bit identity: no pixel differs at all (max |a - b| = 0 over every channel), none is NaN/Inf, and

@@ -5,7 +5,8 @@
 /// then submits the array and the merge with --dependency=afterok on it. Nothing but the tessera
 /// binary runs on the nodes; DIR, the scene and the binary must be on a folder every node sees.
 /// Re-running the same command submits only the ranges whose partial is not in DIR yet (partials
-/// are written atomically: one that exists is complete).
+/// are written atomically: one that exists is complete). A failed task cancels the merge job
+/// (--kill-on-invalid-dep=yes), so nothing is left waiting.
 #include <nlohmann/json.hpp>
 
 #include <unistd.h>
@@ -149,7 +150,9 @@ int runFarm(FarmArgs a) {
     writeText(a.out + "/render.sbatch", render);
     writeText(a.out + "/merge.sbatch", merge);
     std::string arrayId = todo.empty() ? "" : submit(a, "", a.out + "/render.sbatch");
-    std::string mergeId = submit(a, arrayId.empty() ? "" : "--dependency=afterok:" + arrayId, a.out + "/merge.sbatch");
+    // A failed task cancels the merge (instead of leaving it pending forever); the re-run submits anew.
+    std::string mergeId =
+        submit(a, arrayId.empty() ? "" : "--dependency=afterok:" + arrayId + " --kill-on-invalid-dep=yes", a.out + "/merge.sbatch");
     if (a.json) {
         nlohmann::json submitted = nlohmann::json::array();
         for (size_t k : todo) submitted.push_back(ranges[k].str());
