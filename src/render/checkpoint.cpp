@@ -228,7 +228,9 @@ std::string readFraming(Reader& r, FILE* f, const std::string& path, uint64_t si
 /// with both values.
 void checkSettings(const std::string& path, const std::string& text, const CheckpointHeader& expected) {
     CheckpointHeader found = parseHeader(text);
-    for (const auto& [key, value] : expected) {
+    for (const auto& setting : expected) {
+        const std::string& key = setting.first;
+        const std::string& value = setting.second;
         auto it = std::find_if(found.begin(), found.end(), [&](const auto& kv) { return kv.first == key; });
         std::string have = it == found.end() ? "(absent)" : it->second;
         if (have != value)
