@@ -77,8 +77,11 @@ public:
         if (n > 0 && std::fread(p, 1, n, f_) != n)
             throw InputError(path_ + ": cannot read checkpoint (" + what + "): " + std::strerror(errno));
         left_ -= n;
-        crc_ = crc32Update(crc_, p, n);
+        if (checksumming_) crc_ = crc32Update(crc_, p, n);
     }
+    /// After readFraming has verified the checksum of the whole payload, reading it need not
+    /// compute it again (a 4K film is 1.2 GB).
+    void payloadVerified() { checksumming_ = false; }
     template <class T>
     T value(const char* what) {
         T v;
@@ -97,6 +100,7 @@ private:
     const std::string& path_;
     uint64_t left_;
     uLong crc_ = crc32(0L, Z_NULL, 0);
+    bool checksumming_ = true;
 };
 
 std::string headerText(const CheckpointHeader& header) {
@@ -220,6 +224,7 @@ std::string readFraming(Reader& r, FILE* f, const std::string& path, uint64_t si
         if (std::fread(&stored, sizeof stored, 1, f) != 1) throw InputError(path + ": checkpoint is truncated (no checksum)");
         if (uint32_t(crc) != stored) throw InputError(path + ": checkpoint is corrupt (CRC-32 mismatch)");
         std::fseek(f, bodyStart, SEEK_SET);
+        r.payloadVerified();
     }
     return text;
 }
