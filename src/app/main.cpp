@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
     app::Runner view = app::addViewCommand(app);
     app::Runner merge = app::addMergeCommand(app);
     app::Runner farm = app::addFarmCommand(app);
+    app::Runner batch = app::addBatchCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -36,6 +37,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("view")) return view();
         if (app.got_subcommand("merge")) return merge();
         if (app.got_subcommand("farm")) return farm();
+        if (app.got_subcommand("batch")) return batch();
     } catch (const InputError& e) {
         app::printError(e.what());
         return 2;
