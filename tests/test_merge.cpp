@@ -201,7 +201,8 @@ TEST(Merge, TruncatedPartialsAreRefusedAtEvery4KiBBoundary) {
 }
 
 /// The film's sums are the same bits however the contributions are grouped: values over 40 orders
-/// of magnitude, added one by one into one film, or split into three films added together.
+/// of magnitude (1e-20 to 1e20: the largest saturate and their sums wrap, and stay order-independent),
+/// added one by one into one film, or in reverse order into three films added together.
 TEST(Merge, FilmSumsDoNotDependOnGrouping) {
     std::mt19937 rng(17);
     std::uniform_real_distribution<float> exponent(-20.f, 20.f), unit(0.f, 1.f);

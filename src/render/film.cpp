@@ -15,9 +15,9 @@ void Film::accumulate(const Film& other) {
     if (other.width_ != width_ || other.height_ != height_)
         throw std::invalid_argument("Film::accumulate: films of different sizes");
     for (size_t k = 0; k < sum_.size(); ++k) {
-        sum_[k] += other.sum_[k];
-        sumSq_[k] += other.sumSq_[k];
-        splat_[k] += other.splat_[k];
+        addFilmAccum(sum_[k], other.sum_[k]);
+        addFilmAccum(sumSq_[k], other.sumSq_[k]);
+        addFilmAccum(splat_[k], other.splat_[k]);
     }
     for (size_t i = 0; i < count_.size(); ++i) count_[i] += other.count_[i];
 }

@@ -7,7 +7,8 @@
 ///
 /// The sums are exact and order-independent: every contribution is rounded once, on its own, to a
 /// signed 128-bit fixed-point number with 64 fraction bits (a multiple of 2^-64 ~ 5.4e-20, at most
-/// 2^62 ~ 4.6e18 in magnitude), and integer addition is associative. So a film holding samples
+/// 2^62 ~ 4.6e18 in magnitude), and integer addition is associative. A pixel's sums are right while
+/// they stay below 2^63 ~ 9.2e18 (for the sum of squares: samples below ~3e9). So a film holding samples
 /// [0, N) has the same bits however those samples were grouped, ordered or split across processes:
 /// `render --samples A:B` partials merged by `tessera merge` equal a single render bit for bit
 /// (writeup, "Farm rendering"). Floating-point sums would differ in the last bits with the grouping.
@@ -22,7 +23,13 @@ namespace tessera {
 /// One exact accumulator: a value v is held as round-toward-zero(v * 2^64) (see above).
 __extension__ typedef __int128 FilmAccum;
 
-/// v as a FilmAccum: truncated to a multiple of 2^-64, saturated at +-2^62 (never wraps).
+/// a += b modulo 2^128 (unsigned arithmetic: wrapping is defined, and addition modulo 2^128 is
+/// still associative, so the order-independence holds even past the range).
+inline void addFilmAccum(FilmAccum& a, FilmAccum b) {
+    __extension__ typedef unsigned __int128 U;
+    a = FilmAccum(U(a) + U(b));
+}
+/// v as a FilmAccum: truncated to a multiple of 2^-64, saturated at +-2^62.
 inline FilmAccum toFilmAccum(double v) {
     double scaled = v * 0x1p64;
     if (!(std::fabs(scaled) < 0x1p126)) return scaled > 0 ? FilmAccum(1) << 126 : -(FilmAccum(1) << 126);
@@ -49,13 +56,13 @@ public:
         size_t i = size_t(y) * size_t(width_) + size_t(x);
         for (int c = 0; c < 3; ++c) {
             // A float's square is exact in double (24 + 24 significant bits).
-            sum_[3 * i + c] += toFilmAccum(double(L[c]));
-            sumSq_[3 * i + c] += toFilmAccum(double(L[c]) * double(L[c]));
+            addFilmAccum(sum_[3 * i + c], toFilmAccum(double(L[c])));
+            addFilmAccum(sumSq_[3 * i + c], toFilmAccum(double(L[c]) * double(L[c])));
         }
         ++count_[i];
     }
     void addSplat(uint32_t pixelIndex, const Rgb& v) {
-        for (int c = 0; c < 3; ++c) splat_[3 * size_t(pixelIndex) + c] += toFilmAccum(double(v[c]));
+        for (int c = 0; c < 3; ++c) addFilmAccum(splat_[3 * size_t(pixelIndex) + c], toFilmAccum(double(v[c])));
     }
     /// Number of passes' worth of samples per pixel the splat image holds (divides it).
     void setSplatSppDouble(double spp) { splatSpp_ = spp; }

@@ -95,7 +95,9 @@ MergedRender mergePartials(const std::vector<std::string>& paths, bool allowGaps
     const std::string target = valueOf(m.settings, "spp_target");
     uint32_t sppTotal = 0;
     try {
-        sppTotal = uint32_t(std::stoul(target));
+        unsigned long n = std::stoul(target);
+        if (n == 0 || n > (1ul << 30)) throw std::out_of_range("spp_target");
+        sppTotal = uint32_t(n);
     } catch (const std::exception&) {
         throw InputError(parts.front().path + ": partial is corrupt (spp_target '" + target + "')");
     }
