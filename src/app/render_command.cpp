@@ -69,7 +69,9 @@ void printJson(const RenderArgs& a, const RenderSettings& s, const Accel& accel,
         {"resolution", {s.width, s.height}},
         {"threads", stats.threads},
         {"seed", s.seed},
-        {"outputs", out.png.empty() ? nlohmann::json{{"exr", out.exr}} : nlohmann::json{{"exr", out.exr}, {"png", out.png}}},
+        {"outputs", !a.samples.empty() ? nlohmann::json{{"partial", out.exr}}
+                    : out.png.empty()  ? nlohmann::json{{"exr", out.exr}}
+                                       : nlohmann::json{{"exr", out.exr}, {"png", out.png}}},
         {"samples_per_second", samplesPerSecond(stats)},
         {"nonfinite_dropped", stats.nonFiniteDropped},
         {"interrupted", stats.interrupted},
@@ -154,6 +156,9 @@ Runner addRenderCommand(CLI::App& app) {
     cmd->add_option("--debug-pixel", a->debugPixel,
                     "replay one camera sample x,y,s exactly as the render takes it, tracing its rays, hits, splats and the "
                     "first non-finite value on stderr; prints the radiance (or JSON with --json) and writes no image");
+    cmd->add_option("--samples", a->samples,
+                    "render only sample indices A:B (A inclusive, B exclusive, B <= --spp) of every pixel into a partial "
+                    "(-o, default out/<scene>_A-B.partial); 'tessera merge' joins partials into the image");
     cmd->add_option("--stop-after-tiles", a->stopAfterTiles, "test hook: behave as if interrupted after this many tiles")
         ->group("");
     cmd->add_flag("--quiet", a->quiet, "no progress output");

@@ -16,6 +16,7 @@
 #include "io/image_output.h"
 #include "render/checkpoint.h"
 #include "render/interrupt.h"
+#include "render/partial.h"
 
 namespace tessera::app {
 namespace {
@@ -92,6 +93,12 @@ CheckpointHeader checkpointHeader(const RenderJob& a, const RenderSettings& s, c
 
 OutputPaths outputPaths(const RenderJob& a) {
     OutputPaths o;
+    if (!a.samples.empty()) {
+        SampleRange range = parseSampleRange(a.samples, "--samples");
+        o.exr = a.output.empty() ? "out/" + stem(a.scene) + "_" + std::to_string(range.begin) + "-" + std::to_string(range.end) + ".partial"
+                                 : a.output;
+        return o;
+    }
     o.exr = a.output.empty() ? "out/" + stem(a.scene) + ".exr" : a.output;
     o.png = a.noPng ? "" : (a.png.empty() ? std::filesystem::path(o.exr).replace_extension(".png").string() : a.png);
     if (!o.png.empty()) o.display.emplace(a.display, a.view);
@@ -169,6 +176,32 @@ void printSummary(ProgressReporter& progress, const RenderStats& stats, const Ou
     }
 }
 
+/// `--samples A:B`: samples [A, B) of every pixel into a partial (render/partial.h), no image.
+RenderStats renderSampleRange(const RenderJob& a, const JobPlan& plan, const RenderContext& ctx, const Accel& accel,
+                              const std::string& label) {
+    const RenderSettings& s = plan.settings;
+    SampleRange range = parseSampleRange(a.samples, "--samples");
+    RenderOptions ro{.spp = int(range.end), .firstSample = range.begin, .threads = a.threads, .seed = s.seed};
+    InterruptGuard guard;
+    ro.cancel = &interruptFlag();
+    ProgressReporter progress(label + " samples " + range.str(), uint64_t(s.width) * uint64_t(s.height) * (range.end - range.begin),
+                              0.0, a.quiet);
+    ro.progress = &progress;
+    Film film(s.width, s.height);
+    RenderStats stats = renderImage(ctx, *plan.integrator, film, ro);
+    if (stats.interrupted) {
+        progress.done("samples " + range.str() + " INTERRUPTED: no partial written");
+        return stats;
+    }
+    CheckpointHeader header = checkpointHeader(a, s, plan.camera, *plan.integrator, ro.tileSize);
+    header.push_back({"scene", a.scene});
+    header.push_back({"accel", std::string(accel.name())});
+    writePartial(plan.out.exr, header, range, film, stats);
+    progress.done("samples " + range.str() + " in " + formatDuration(stats.seconds) + " (" + std::to_string(samplesPerSecond(stats) / 1e6) +
+                  " M samples/s, " + std::to_string(stats.threads) + " threads) -> " + plan.out.exr);
+    return stats;
+}
+
 }  // namespace
 
 double samplesPerSecond(const RenderStats& stats) { return stats.seconds > 0 ? double(stats.samples) / stats.seconds : 0.0; }
@@ -181,6 +214,14 @@ std::string describe(const SampleId& id) {
 
 JobPlan planRenderJob(const RenderJob& job, const RenderSettings& settings, const CameraDesc& camera) {
     checkFilmFits(job, settings);
+    if (!job.samples.empty()) {
+        SampleRange range = parseSampleRange(job.samples, "--samples");
+        if (job.timeLimit > 0 || job.resume || job.checkpointSeconds >= 0 || !job.bdptStrategies.empty())
+            throw InputError("--samples renders a fixed sample range: not with --time, --checkpoint, --resume or --bdpt-strategies");
+        if (range.end > uint32_t(settings.spp))
+            throw InputError("--samples " + range.str() + " goes past the render's " + std::to_string(settings.spp) +
+                             " spp (give the total with --spp N)");
+    }
     JobPlan plan{settings, camera, outputPaths(job), nullptr};
     plan.integrator = createIntegrator(settings.integrator);
     return plan;
@@ -193,6 +234,8 @@ RenderJobResult runRenderJob(const RenderJob& a, const JobPlan& plan, const Scen
     const OutputPaths& out = plan.out;
     Camera camera(plan.camera, s.width, s.height);
     RenderContext ctx{scene, accel, camera, s.maxDepth};
+    if (!a.samples.empty()) return RenderJobResult{renderSampleRange(a, plan, ctx, accel, label), std::string(accel.name()),
+                                                   accel.stats().buildSeconds, ""};
 
     Film film(s.width, s.height);
     RenderOptions ro{.spp = s.spp, .timeLimitSeconds = a.timeLimit, .threads = a.threads, .seed = s.seed};

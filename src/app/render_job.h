@@ -35,6 +35,9 @@ struct RenderJob : SceneOptions {
     double checkpointSeconds = -1.0;  ///< < 0: no checkpoints
     bool resume = false;
     uint64_t stopAfterTiles = 0;  ///< test hook (hidden option)
+    /// "A:B": render only samples [A, B) of every pixel into a partial at `output` (default
+    /// out/<scene>_A-B.partial) for `tessera merge` (render/partial.h), instead of an image.
+    std::string samples;
 };
 
 /// The acceleration structure a job asks for ("embree" when it names none).
@@ -56,7 +59,8 @@ struct JobPlan {
 };
 
 /// Checks the film memory, the output paths, the display transform and the integrator of `job`
-/// rendered with `settings` from `camera`.
+/// rendered with `settings` from `camera` (and a sample range's bounds and options). For a sample
+/// range, `out.exr` is the partial's path and no PNG is written.
 JobPlan planRenderJob(const RenderJob& job, const RenderSettings& settings, const CameraDesc& camera);
 
 struct RenderJobResult {
