@@ -137,6 +137,19 @@ void touchedInterval(const Ray& r, const Vec3d (&p)[3], double slack, double& lo
     }
 }
 
+/// How far a float triangle test's barycentrics may be from the exact ones: its edge functions are
+/// 2-D cross products of vertices relative to the origin (magnitude S²), rounded to a few ulps of
+/// S², and divided by twice the triangle's area projected along the ray (area2 · cos θ). Bounded
+/// as in Woop et al. 2013 (watertight test, §4) with 8 ulps; it reaches 1 for a ray in a sliver's
+/// plane, where a float test returns rounding noise for (u, v) and a t among the vertices'.
+double barycentricNoise(const Ray& r, const Vec3d (&p)[3]) {
+    Vec3d o(r.o), d(r.d), n = glm::cross(p[1] - p[0], p[2] - p[0]);
+    double s2 = 0.0;
+    for (const Vec3d& q : p) s2 = std::max(s2, glm::dot(q - o, q - o));
+    double projectedArea2 = std::abs(glm::dot(n, d)) / glm::length(d);
+    return projectedArea2 > 0.0 ? 8.0 * 0x1p-24 * s2 / projectedArea2 : kInfinity;
+}
+
 /// `reportedT` chooses, for a sphere, which of its two crossings a record refers to.
 PrimCheck checkPrimitive(const SceneGeometry& g, const Ray& r, uint32_t geomId, uint32_t primId, float edgeUlps,
                          double reportedT) {
@@ -161,7 +174,21 @@ PrimCheck checkPrimitive(const SceneGeometry& g, const Ray& r, uint32_t geomId, 
             return c;
         }
         if (m.alphaMask) checkAlpha(m, primId, p, r, b1, b2, c);
-        c.hitInside = b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0 && !c.nearBoundary;
+        double bNoise = barycentricNoise(r, p), b0 = 1.0 - b1 - b2;
+        c.hitInside = std::min({b0, b1, b2}) > bNoise && !c.nearBoundary;
+        if (std::min({b0, b1, b2}) >= -bNoise) {
+            // The crossing is within the float test's barycentric noise of the triangle: a hit there
+            // is admissible, at a t the noise moves along the vertices' spread along the ray.
+            double spread = 0.0, zLo = kInfinity, zHi = -kInfinity;
+            for (const Vec3d& q : p) {
+                double z = glm::dot(q - o, d) / (dLen * dLen);
+                spread = std::max(spread, std::abs(z - t));
+                zLo = std::min(zLo, z), zHi = std::max(zHi, z);
+            }
+            double dt = 2.0 * bNoise * spread;
+            c.tLo = std::min(c.tLo, std::max(t - dt, zLo));
+            c.tHi = std::max(c.tHi, std::min(t + dt, zHi));
+        }
         return c;
     }
     // A sphere: the ray touches it where it is within slack of the surface, between the spheres of
