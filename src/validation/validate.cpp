@@ -164,11 +164,14 @@ PrimCheck checkPrimitive(const SceneGeometry& g, const Ray& r, uint32_t geomId, 
         for (const Vec3d& q : p) scale = std::max(scale, glm::length(q));
         double t = 0.0, b1 = 0.0, b2 = 0.0;
         bool plane = planeHit(r, p[0], p[1], p[2], t, b1, b2);
-        c.slack = edgeUlps * 0x1p-24 * (scale + (plane ? std::abs(t) * dLen : 0.0)) * conditionNumber(p[0], p[1], p[2]);
+        // Rounding moves an ill-conditioned triangle's plane (so t) by up to `slack`, its edges in the
+        // plane only by ulps of the magnitude: a sliver is certainly hit across its middle.
+        double edgeSlack = edgeUlps * 0x1p-24 * (scale + (plane ? std::abs(t) * dLen : 0.0));
+        c.slack = edgeSlack * conditionNumber(p[0], p[1], p[2]);
         touchedInterval(r, p, c.slack, c.tLo, c.tHi);
         double edgeDist = kInfinity;
         for (int e = 0; e < 3; ++e) edgeDist = std::min(edgeDist, lineSegmentDistance(o, d, p[e], p[(e + 1) % 3]));
-        c.nearBoundary = edgeDist <= c.slack;
+        c.nearBoundary = edgeDist <= edgeSlack;
         if (!plane) {
             c.alphaMarginal = bool(m.alphaMask);  // parallel to the plane: no single point to evaluate the mask at
             return c;
@@ -178,13 +181,16 @@ PrimCheck checkPrimitive(const SceneGeometry& g, const Ray& r, uint32_t geomId, 
         c.hitInside = std::min({b0, b1, b2}) > bNoise && !c.nearBoundary;
         if (std::min({b0, b1, b2}) >= -bNoise) {
             // The crossing is within the float test's barycentric noise of the triangle: a hit there
-            // is admissible, at a t the noise moves along the vertices' spread along the ray.
+            // is admissible, at a t the noise moves among the vertices' distances along the ray — a
+            // weighted mean of them, measured along the ray's direction or, in a watertight test, along
+            // its dominant axis (Woop et al. 2013).
+            int k = std::abs(d.x) >= std::abs(d.y) ? (std::abs(d.x) >= std::abs(d.z) ? 0 : 2) : (std::abs(d.y) >= std::abs(d.z) ? 1 : 2);
             double spread = 0.0, zLo = kInfinity, zHi = -kInfinity;
-            for (const Vec3d& q : p) {
-                double z = glm::dot(q - o, d) / (dLen * dLen);
-                spread = std::max(spread, std::abs(z - t));
-                zLo = std::min(zLo, z), zHi = std::max(zHi, z);
-            }
+            for (const Vec3d& q : p)
+                for (double z : {glm::dot(q - o, d) / (dLen * dLen), (q[k] - o[k]) / d[k]}) {
+                    spread = std::max(spread, std::abs(z - t));
+                    zLo = std::min(zLo, z), zHi = std::max(zHi, z);
+                }
             double dt = 2.0 * bNoise * spread;
             c.tLo = std::min(c.tLo, std::max(t - dt, zLo));
             c.tHi = std::max(c.tHi, std::min(t + dt, zHi));
