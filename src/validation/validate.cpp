@@ -59,15 +59,16 @@ double conditionNumber(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2) {
     return area2 > 0.0 ? std::max(1.0, longest * longest / area2) : 1e30;
 }
 
-/// What double precision says about a primitive along a ray. A float intersection test may place a
-/// primitive anywhere within `slack` (world units) of where it is: its vertices' rounding, scaled by
-/// the conditioning of the triangle. So the ray *touches* the primitive over an interval of
-/// distances [tLo, tHi] — where it passes within slack of it — and any t there is admissible for a
-/// hit; the hit is *certain* when the ray crosses it farther than slack from its boundary.
+/// What double precision says about a primitive along a ray. Rounding lets a float test place a
+/// triangle's plane anywhere within `slack` (world units: ulps of the magnitude times the triangle's
+/// condition number) and its edges within ulps of the magnitude, and, for a ray nearly in its plane,
+/// report (u, v) that are rounding noise. So the ray *touches* the primitive over an interval of
+/// distances [tLo, tHi] where a float test may report a hit; the hit is *certain* when the ray
+/// crosses it farther than those bounds from its boundary.
 struct PrimCheck {
-    bool hitInside = false;  ///< crossed strictly inside, farther than slack from the boundary
-    bool nearBoundary = false;
-    double tLo = kInfinity, tHi = -kInfinity;  ///< distances within slack of the primitive; empty when tLo > tHi
+    bool hitInside = false;     ///< crossed inside, farther than the bounds from every edge (sphere: from the silhouette)
+    bool nearBoundary = false;  ///< within ulps of the magnitude of an edge (sphere: of the silhouette)
+    double tLo = kInfinity, tHi = -kInfinity;  ///< the touched distances; empty when tLo > tHi
     double slack = 0.0;
     /// Cut-out triangles (alpha mask): whether the mask keeps the point where the ray meets the
     /// plane, and whether that answer could flip within `slack` of it (a point on the mask's cutoff
