@@ -67,13 +67,20 @@ float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> l
     z[size_t(t - 1)].delta = false;
 
     // The four densities the connection changes (pbrt-v3 §16.3.4's "pdfRev" updates):
-    // z(t−1) sampled from the light side: from y(s−1) (given y(s−2)), or as an emitter origin.
-    z[size_t(t - 1)].pdfRevA = s > 0 ? pdfNextA(ctx, qsMinus, *qs, *pt) : pdfLightOriginA(ctx, *pt);
-    // z(t−2) sampled from z(t−1) given y(s−1), or emitted from z(t−1) when it lies on a light.
-    if (ptMinus) z[size_t(t - 2)].pdfRevA = s > 0 ? pdfNextA(ctx, qs, *pt, *ptMinus) : pdfLightDirectionA(ctx, *pt, *ptMinus);
-    // y(s−1) sampled from z(t−1) given z(t−2); y(s−2) from y(s−1) given z(t−1).
-    if (s > 0) y[size_t(s - 1)].pdfRevA = pdfNextA(ctx, ptMinus, *pt, *qs);
-    if (qsMinus) y[size_t(s - 2)].pdfRevA = pdfNextA(ctx, pt, *qs, *qsMinus);
+    // z(t−1) sampled from the light side: from y(s−1) (given y(s−2)), or as an emitter origin;
+    // y(s−2) sampled from y(s−1) given z(t−1) (the same vertex pair: one call for both).
+    if (s == 0) z[size_t(t - 1)].pdfRevA = pdfLightOriginA(ctx, *pt);
+    else if (qsMinus) pdfBothWaysA(ctx, *qsMinus, *qs, *pt, z[size_t(t - 1)].pdfRevA, y[size_t(s - 2)].pdfRevA);
+    else z[size_t(t - 1)].pdfRevA = pdfNextA(ctx, nullptr, *qs, *pt);
+    // y(s−1) sampled from z(t−1) given z(t−2); z(t−2) sampled from z(t−1) given y(s−1), or emitted
+    // from z(t−1) when it lies on a light.
+    if (s == 0) {
+        if (ptMinus) z[size_t(t - 2)].pdfRevA = pdfLightDirectionA(ctx, *pt, *ptMinus);
+    } else if (ptMinus) {
+        pdfBothWaysA(ctx, *ptMinus, *pt, *qs, y[size_t(s - 1)].pdfRevA, z[size_t(t - 2)].pdfRevA);
+    } else {
+        y[size_t(s - 1)].pdfRevA = pdfNextA(ctx, nullptr, *pt, *qs);
+    }
 
     bool lightIsDelta = false;
     if (s > 0) {

@@ -38,6 +38,23 @@ float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVerte
     return convertDensity(pdfW, cur, next);
 }
 
+void pdfBothWaysA(const RenderContext& ctx, const PathVertex& a, const PathVertex& cur, const PathVertex& b, float& pdfToBA,
+                  float& pdfToAA) {
+    Vec3f wb, wa;
+    if (cur.type != VertexType::Surface || (wb = directionTo(cur, b)) == Vec3f(0.f) || (wa = directionTo(cur, a)) == Vec3f(0.f)) {
+        pdfToBA = pdfNextA(ctx, &a, cur, b);
+        pdfToAA = pdfNextA(ctx, &b, cur, a);
+        return;
+    }
+    // The same directions, frame, side test and BSDF inputs serve both densities: one SurfaceBsdf,
+    // each density exactly as pdfNextA computes it.
+    SurfaceBsdf bsdf(cur.bsdf, cur.ns, cur.ng);
+    float pdfToBW, pdfToAW;
+    bsdf.pdfBothW(wa, wb, pdfToBW, pdfToAW);
+    pdfToBA = convertDensity(pdfToBW, cur, b);
+    pdfToAA = convertDensity(pdfToAW, cur, a);
+}
+
 float pdfLightOriginA(const RenderContext& ctx, const PathVertex& v) {
     if (v.lightIndex == kInvalidId) return 0.f;
     float pdfPosA, pdfDirW;
@@ -71,7 +88,11 @@ namespace {
 /// σa of the segment from `v` towards `other` as seen from `v`: surface vertices by their BSDF
 /// inputs, a light vertex on an area emitter by the emitter's material; zero for the rest.
 Rgb endSigma(const RenderContext& ctx, const PathVertex& v, const PathVertex& other) {
-    if (v.type == VertexType::Surface) return volumeSigmaAt(v.bsdf, v.ng, directionTo(v, other));
+    if (v.type == VertexType::Surface) {
+        // Most surfaces are no volume boundary: skip the direction (a square root) for them.
+        if (v.bsdf.thinWalled || isBlack(v.bsdf.attenuationCoeff)) return Rgb(0.f);
+        return volumeSigmaAt(v.bsdf, v.ng, directionTo(v, other));
+    }
     if (v.type == VertexType::Light && !v.atInfinity) return emitterVolumeSigma(ctx.scene, v.lightIndex, v.ng, directionTo(v, other));
     return Rgb(0.f);
 }
@@ -158,10 +179,16 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         // hemisphere samples otherwise differ by a few percent). Delta densities stay 0.
         const size_t n = out.size();
         const PathVertex& prev = out[n - 1];
-        v.pdfFwdA = prev.delta ? 0.f : pdfNextA(ctx, n >= 2 ? &out[n - 2] : nullptr, prev, v);
         // The successor now exists: the density of the predecessor's predecessor being sampled
         // from `prev` given `v` (Veach's p←), i.e. pdfRevA of out[n − 2].
-        if (n >= 2) out[n - 2].pdfRevA = prev.delta ? 0.f : pdfNextA(ctx, &v, prev, out[n - 2]);
+        if (prev.delta) {
+            v.pdfFwdA = 0.f;
+            if (n >= 2) out[n - 2].pdfRevA = 0.f;
+        } else if (n >= 2) {
+            pdfBothWaysA(ctx, out[n - 2], prev, v, v.pdfFwdA, out[n - 2].pdfRevA);
+        } else {
+            v.pdfFwdA = pdfNextA(ctx, nullptr, prev, v);
+        }
         out.push_back(v);
         if (!found || int(out.size()) >= limit) break;
 

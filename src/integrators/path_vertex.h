@@ -69,6 +69,11 @@ float convertDensity(float pdfW, const PathVertex& from, const PathVertex& to);
 /// Area density at `next` of `cur` sampling `next`, given that `cur` was reached from `prev`
 /// (ignored for camera and light vertices): the BSDF, camera or light-emission direction density.
 float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next);
+/// pdfNextA(&a, cur, b) and pdfNextA(&b, cur, a) at once, bit-identical to the two calls: for a
+/// surface vertex both densities share one BSDF, frame and side test (the walks and the connection
+/// weights need both densities of the same vertex pair).
+void pdfBothWaysA(const RenderContext& ctx, const PathVertex& a, const PathVertex& cur, const PathVertex& b, float& pdfToBA,
+                  float& pdfToAA);
 /// For a vertex on an emitter (light vertex, or a surface vertex with lightIndex): pdfPosA of the
 /// light sub-path starting there (selection included); for a vertex at infinity the solid-angle
 /// density of its direction (selection included).
