@@ -1,6 +1,7 @@
 #include "integrators/bdpt_connect.h"
 
-#include <array>
+#include <cstddef>
+#include <memory>
 
 #include "integrators/next_event.h"
 
@@ -25,16 +26,20 @@ void attenuateEdge(const RenderContext& ctx, Rgb& L, const PathVertex& a, const 
 }
 
 /// Fixed-capacity scratch for the MIS densities, growing on the heap only for very long paths.
+/// Only the n entries in use are constructed: initialising the whole inline array was most of the
+/// cost of a weight.
 class MisScratch {
 public:
     MisScratch(const MisScratch&) = delete;
-    explicit MisScratch(size_t n) : heap_(n > kInline ? n : 0) { data_ = n > kInline ? heap_.data() : inline_.data(); }
+    explicit MisScratch(size_t n) : heap_(n > kInline ? n : 0) {
+        data_ = n > kInline ? heap_.data() : std::uninitialized_default_construct_n(reinterpret_cast<MisVertex*>(inline_), n) - n;
+    }
     MisVertex& operator[](size_t i) { return data_[i]; }
     MisVertex* data() { return data_; }
 
 private:
     static constexpr size_t kInline = 32;
-    std::array<MisVertex, kInline> inline_{};
+    alignas(MisVertex) std::byte inline_[kInline * sizeof(MisVertex)];
     std::vector<MisVertex> heap_;
     MisVertex* data_;
 };
