@@ -149,8 +149,8 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
         if (!(dist2 > 0.f)) return r;
         Vec3f wn = w / std::sqrt(dist2);
         float G = cosAt(*qs, wn) * cosAt(*pt, wn) / dist2;
-        r.L = qs->beta * evalVertex(ctx, *qs, *pt, TransportMode::Importance) * G *
-              evalVertex(ctx, *pt, *qs, TransportMode::Radiance) * pt->beta;
+        r.L = qs->beta * evalVertexTowards(ctx, *qs, wn, TransportMode::Importance) * G *
+              evalVertexTowards(ctx, *pt, -wn, TransportMode::Radiance) * pt->beta;
         if (isBlack(r.L) || !unoccluded(ctx, *qs, *pt)) return ConnectionResult{};
         attenuateEdge(ctx, r.L, *qs, *pt);
     }

@@ -92,6 +92,8 @@ Rgb segmentTransmittance(const RenderContext& ctx, const PathVertex& a, const Pa
 /// The "f" of a vertex towards `next` in a connection: BSDF (adjoint for importance, with the
 /// shading correction), emitted radiance / intensity for light vertices, importance We for the camera.
 Rgb evalVertex(const RenderContext& ctx, const PathVertex& v, const PathVertex& next, TransportMode mode);
+/// evalVertex with the unit direction towards `next` already known (w == directionTo(v, next), non-zero).
+Rgb evalVertexTowards(const RenderContext& ctx, const PathVertex& v, const Vec3f& w, TransportMode mode);
 /// Emitted radiance of a surface vertex lying on a light, towards its predecessor, or of the
 /// environment a camera sub-path escaped to (s = 0 strategy).
 Rgb emittedAt(const RenderContext& ctx, const PathVertex& v);
