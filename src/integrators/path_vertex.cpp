@@ -192,13 +192,14 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         // Densities are evaluated from the vertex positions rather than taken from the sampling
         // routine: the connection code evaluates them the same way, so every strategy sees exactly
         // the same p→/p← for a vertex and the weights sum to one to rounding (grazing cosine-
-        // hemisphere samples otherwise differ by a few percent). Delta densities stay 0.
+        // hemisphere samples otherwise differ by a few percent). After a delta scattering the
+        // density is the delta's unit weight converted to area (deltaDensityA).
         const PathVertex& prev = out[n - 1];
         // The successor now exists: the density of the predecessor's predecessor being sampled
         // from `prev` given `v` (Veach's p←), i.e. pdfRevA of out[n − 2].
         if (prev.delta) {
-            v.pdfFwdA = 0.f;
-            if (n >= 2) out[n - 2].pdfRevA = 0.f;
+            v.pdfFwdA = deltaDensityA(prev, v);
+            if (n >= 2) out[n - 2].pdfRevA = deltaDensityA(prev, out[n - 2]);
         } else if (n >= 2) {
             pdfBothWaysA(ctx, out[n - 2], prev, v, v.pdfFwdA, out[n - 2].pdfRevA);
         } else {
