@@ -18,7 +18,8 @@ one-line description):
       sds-caustic, point-light-specular, furnace;
   asset scenes: webxr-controllers, webxr-lineup (WebXR controller GLBs via
       TESSERA_asset_gltf, fetched, not committed);
-  light scenes: spot-light (spot + directional), hdri-spheres and hdri-sun (environment).
+  light scenes: spot-light (spot + directional), hdri-spheres and hdri-sun (environment);
+  smallvcm-cornell: SmallVCM's Cornell box, for tools/bench_smallvcm.sh.
 
 Conventions (what Tessera's loader reads):
   * Materials: pbrMetallicRoughness with metallicFactor written explicitly
@@ -215,6 +216,57 @@ def sphere_cornell(variant):
 
     g.camera("camera", yfov=2.0 * math.atan(0.5135), aspect=4.0 / 3.0, znear=0.1)
     g.render((640, 480), 64, -1, 0, "ptnee")
+    return g
+
+
+# --------------------------------------------------------------------------
+# SmallVCM's Cornell box (Davidovic's SmallVCM, src/scene.hxx LoadCornellBox), rebuilt from its
+# published coordinates for side-by-side runs (tools/bench_smallvcm.sh): its configuration
+# kLargeMirrorSphere | kLightCeiling without kGlossyFloor (white diffuse floor and back wall), z up,
+# the light the downward face of a small box under the ceiling, the open front facing the camera.
+SVCM_BOX_LO = (-1.27029, -1.25549, -1.28002)
+SVCM_BOX_HI = (1.28975, 1.30455, 1.28002)
+SVCM_LIGHT_LO = (-0.25, -0.25, 1.26002)
+SVCM_LIGHT_HI = (0.25, 0.25, 1.28002)
+SVCM_CAMERA_EYE = (-0.0439815, -4.12529, 0.222539)
+SVCM_CAMERA_FORWARD = (0.00688625, 0.998505, -0.0542161)
+SVCM_CAMERA_UP = (3.73896e-4, 0.0542148, 0.998529)
+
+
+def smallvcm_cornell():
+    g = Gltf("SmallVCM's Cornell box (large mirror sphere, ceiling light box, diffuse floor), its "
+             "coordinates, materials, camera (45 degree field of view) and 512x512 resolution: "
+             "the scene of the SmallVCM comparison (tools/bench_smallvcm.sh).")
+    g.use("TESSERA_sphere", required=True)
+    white = g.material("white", base=(0.803922, 0.803922, 0.803922), specular=0.0)
+    green = g.material("green", base=(0.156863, 0.803922, 0.172549), specular=0.0)
+    red = g.material("red", base=(0.803922, 0.152941, 0.152941), specular=0.0)
+    mirror = g.material("mirror", base=(1.0, 1.0, 1.0), metallic=1.0, roughness=0.0)
+    # SmallVCM's AreaLight mIntensity: the radiance of the light box's lower face.
+    light = g.material("light", base=(0.0, 0.0, 0.0), emission=((1.0, 1.0, 1.0), 25.03329895614464),
+                       specular=0.0)
+    (x0, y0, z0), (x1, y1, z1) = SVCM_BOX_LO, SVCM_BOX_HI
+    room = [
+        ("floor", [(x0, y1, z0), (x0, y0, z0), (x1, y0, z0), (x1, y1, z0)], (0.0, 0.0, 1.0), white),
+        ("back wall", [(x0, y1, z0), (x1, y1, z0), (x1, y1, z1), (x0, y1, z1)], (0.0, -1.0, 0.0), white),
+        ("ceiling", [(x1, y1, z1), (x1, y0, z1), (x0, y0, z1), (x0, y1, z1)], (0.0, 0.0, -1.0), white),
+        ("left wall (green)", [(x0, y1, z1), (x0, y0, z1), (x0, y0, z0), (x0, y1, z0)], (1.0, 0.0, 0.0), green),
+        ("right wall (red)", [(x1, y1, z0), (x1, y0, z0), (x1, y0, z1), (x1, y1, z1)], (-1.0, 0.0, 0.0), red),
+    ]
+    for name, quad, normal, mat in room:
+        g.quads(name, [quad], lambda q, n=normal: n, mat)
+    # The light box: four white sides facing out (its top is the ceiling), the emitting face down.
+    sides = [f for f in box_quads(SVCM_LIGHT_LO, SVCM_LIGHT_HI) if f[1][2] == 0.0]
+    add_faces(g, "light box", sides, white)
+    bottom = [f for f in box_quads(SVCM_LIGHT_LO, SVCM_LIGHT_HI) if f[1][2] < 0.0]
+    add_faces(g, "light", bottom, light)
+    radius = 0.8
+    centre = ((x0 + x1) / 2.0, (y0 + y1) / 2.0, z0 + radius)
+    g.sphere("mirror sphere", centre, radius, mirror)
+    eye = SVCM_CAMERA_EYE
+    g.camera("camera", yfov=math.radians(45.0), aspect=1.0, znear=0.01, translation=eye,
+             rotation=look_at_rotation(eye, add(eye, SVCM_CAMERA_FORWARD), SVCM_CAMERA_UP))
+    g.render((512, 512), 64, 9, 0, "bdpt")
     return g
 
 
@@ -705,6 +757,7 @@ SCENE_LIST = [
     ("spot-light", "spot-light", spot_light, True),
     ("hdri-spheres", "hdri-spheres", lambda: hdri_spheres(True), True),
     ("hdri-spheres", "hdri-sun", lambda: hdri_spheres(False), True),
+    ("smallvcm-cornell", "smallvcm-cornell", smallvcm_cornell, True),
 ]
 
 

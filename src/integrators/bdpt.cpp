@@ -34,6 +34,9 @@ Rgb BdptIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
             if (s + t < 2) continue;
             if (s > nLight && t == 1) continue;  // (1, 1) joins the light sub-path's own y0 to the lens
             if (maxDepth >= 0 && s + t - 2 > maxDepth) continue;
+            // s = 0 needs z(t−1) on an emitter: most camera vertices are not, and the strategy is
+            // then zero without a call (the trace still lists every strategy).
+            if (s == 0 && camera[size_t(t - 1)].lightIndex == kInvalidId && !ctx.trace) continue;
             ConnectionResult r = connectBdpt(ctx, light, camera, s, t, sampler, settings_.heuristic);
             if (ctx.trace) [[unlikely]] {
                 // Unweighted C*_{s,t}, its MIS weight and what reaches the image (t = 1: a splat).

@@ -1,6 +1,7 @@
 #include "integrators/bdpt_connect.h"
 
-#include <array>
+#include <cstddef>
+#include <memory>
 
 #include "integrators/next_event.h"
 
@@ -25,16 +26,20 @@ void attenuateEdge(const RenderContext& ctx, Rgb& L, const PathVertex& a, const 
 }
 
 /// Fixed-capacity scratch for the MIS densities, growing on the heap only for very long paths.
+/// Only the n entries in use are constructed: initialising the whole inline array was most of the
+/// cost of a weight.
 class MisScratch {
 public:
     MisScratch(const MisScratch&) = delete;
-    explicit MisScratch(size_t n) : heap_(n > kInline ? n : 0) { data_ = n > kInline ? heap_.data() : inline_.data(); }
+    explicit MisScratch(size_t n) : heap_(n > kInline ? n : 0) {
+        data_ = n > kInline ? heap_.data() : std::uninitialized_default_construct_n(reinterpret_cast<MisVertex*>(inline_), n) - n;
+    }
     MisVertex& operator[](size_t i) { return data_[i]; }
     MisVertex* data() { return data_; }
 
 private:
     static constexpr size_t kInline = 32;
-    std::array<MisVertex, kInline> inline_{};
+    alignas(MisVertex) std::byte inline_[kInline * sizeof(MisVertex)];
     std::vector<MisVertex> heap_;
     MisVertex* data_;
 };
@@ -86,13 +91,20 @@ float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> l
     z[size_t(t - 1)].delta = false;
 
     // The four densities the connection changes (pbrt-v3 §16.3.4's "pdfRev" updates):
-    // z(t−1) sampled from the light side: from y(s−1) (given y(s−2)), or as an emitter origin.
-    z[size_t(t - 1)].pdfRevA = s > 0 ? pdfNextA(ctx, qsMinus, *qs, *pt) : pdfLightOriginA(ctx, *pt);
-    // z(t−2) sampled from z(t−1) given y(s−1), or emitted from z(t−1) when it lies on a light.
-    if (ptMinus) z[size_t(t - 2)].pdfRevA = s > 0 ? pdfNextA(ctx, qs, *pt, *ptMinus) : pdfLightDirectionA(ctx, *pt, *ptMinus);
-    // y(s−1) sampled from z(t−1) given z(t−2); y(s−2) from y(s−1) given z(t−1).
-    if (s > 0) y[size_t(s - 1)].pdfRevA = pdfNextA(ctx, ptMinus, *pt, *qs);
-    if (qsMinus) y[size_t(s - 2)].pdfRevA = pdfNextA(ctx, pt, *qs, *qsMinus);
+    // z(t−1) sampled from the light side: from y(s−1) (given y(s−2)), or as an emitter origin;
+    // y(s−2) sampled from y(s−1) given z(t−1) (the same vertex pair: one call for both).
+    if (s == 0) z[size_t(t - 1)].pdfRevA = pdfLightOriginA(ctx, *pt);
+    else if (qsMinus) pdfBothWaysA(ctx, *qsMinus, *qs, *pt, z[size_t(t - 1)].pdfRevA, y[size_t(s - 2)].pdfRevA);
+    else z[size_t(t - 1)].pdfRevA = pdfNextA(ctx, nullptr, *qs, *pt);
+    // y(s−1) sampled from z(t−1) given z(t−2); z(t−2) sampled from z(t−1) given y(s−1), or emitted
+    // from z(t−1) when it lies on a light.
+    if (s == 0) {
+        if (ptMinus) z[size_t(t - 2)].pdfRevA = pdfLightDirectionA(ctx, *pt, *ptMinus);
+    } else if (ptMinus) {
+        pdfBothWaysA(ctx, *ptMinus, *pt, *qs, y[size_t(s - 1)].pdfRevA, z[size_t(t - 2)].pdfRevA);
+    } else {
+        y[size_t(s - 1)].pdfRevA = pdfNextA(ctx, nullptr, *pt, *qs);
+    }
 
     bool lightIsDelta = false;
     float nee = 1.f;  // p_NEE / p_origin of x0 given x1, for the strategy s = 1 of this path
@@ -160,8 +172,8 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
         if (!(dist2 > 0.f)) return r;
         Vec3f wn = w / std::sqrt(dist2);
         float G = cosAt(*qs, wn) * cosAt(*pt, wn) / dist2;
-        r.L = qs->beta * evalVertex(ctx, *qs, *pt, TransportMode::Importance) * G *
-              evalVertex(ctx, *pt, *qs, TransportMode::Radiance) * pt->beta;
+        r.L = qs->beta * evalVertexTowards(ctx, *qs, wn, TransportMode::Importance) * G *
+              evalVertexTowards(ctx, *pt, -wn, TransportMode::Radiance) * pt->beta;
         if (isBlack(r.L) || !unoccluded(ctx, *qs, *pt)) return ConnectionResult{};
         attenuateEdge(ctx, r.L, *qs, *pt);
     }

@@ -38,6 +38,29 @@ float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVerte
     return convertDensity(pdfW, cur, next);
 }
 
+void pdfBothWaysA(const RenderContext& ctx, const PathVertex& a, const PathVertex& cur, const PathVertex& b, float& pdfToBA,
+                  float& pdfToAA) {
+    // The same directions, frame, side test and BSDF inputs serve both densities: one SurfaceBsdf,
+    // and each segment's length computed once for its direction and its solid-angle-to-area factor.
+    // The arithmetic is that of directionTo and convertDensity, so the densities are bit-identical
+    // to two pdfNextA calls. Vertices at infinity and coincident points take the general route.
+    Vec3f db = b.p - cur.p, da = a.p - cur.p;
+    float dist2B = glm::dot(db, db), dist2A = glm::dot(da, da);
+    if (cur.type != VertexType::Surface || a.atInfinity || b.atInfinity || !(dist2A > 0.f) || !(dist2B > 0.f)) {
+        pdfToBA = pdfNextA(ctx, &a, cur, b);
+        pdfToAA = pdfNextA(ctx, &b, cur, a);
+        return;
+    }
+    float lenB = std::sqrt(dist2B), lenA = std::sqrt(dist2A);
+    SurfaceBsdf bsdf(cur.bsdf, cur.ns, cur.ng);
+    float pdfToBW, pdfToAW;
+    bsdf.pdfBothW(da / lenA, db / lenB, pdfToBW, pdfToAW);
+    pdfToBA = pdfToBW / dist2B;
+    if (b.onSurface()) pdfToBA *= std::abs(glm::dot(b.ng, db)) / lenB;
+    pdfToAA = pdfToAW / dist2A;
+    if (a.onSurface()) pdfToAA *= std::abs(glm::dot(a.ng, da)) / lenA;
+}
+
 float pdfLightOriginA(const RenderContext& ctx, const PathVertex& v) {
     if (v.lightIndex == kInvalidId) return 0.f;
     float pdfPosA, pdfDirW;
@@ -71,7 +94,11 @@ namespace {
 /// σa of the segment from `v` towards `other` as seen from `v`: surface vertices by their BSDF
 /// inputs, a light vertex on an area emitter by the emitter's material; zero for the rest.
 Rgb endSigma(const RenderContext& ctx, const PathVertex& v, const PathVertex& other) {
-    if (v.type == VertexType::Surface) return volumeSigmaAt(v.bsdf, v.ng, directionTo(v, other));
+    if (v.type == VertexType::Surface) {
+        // Most surfaces are no volume boundary: skip the direction (a square root) for them.
+        if (v.bsdf.thinWalled || isBlack(v.bsdf.attenuationCoeff)) return Rgb(0.f);
+        return volumeSigmaAt(v.bsdf, v.ng, directionTo(v, other));
+    }
     if (v.type == VertexType::Light && !v.atInfinity) return emitterVolumeSigma(ctx.scene, v.lightIndex, v.ng, directionTo(v, other));
     return Rgb(0.f);
 }
@@ -89,6 +116,10 @@ Rgb segmentTransmittance(const RenderContext& ctx, const PathVertex& a, const Pa
 Rgb evalVertex(const RenderContext& ctx, const PathVertex& v, const PathVertex& next, TransportMode mode) {
     Vec3f w = directionTo(v, next);
     if (w == Vec3f(0.f)) return Rgb(0.f);
+    return evalVertexTowards(ctx, v, w, mode);
+}
+
+Rgb evalVertexTowards(const RenderContext& ctx, const PathVertex& v, const Vec3f& w, TransportMode mode) {
     switch (v.type) {
     case VertexType::Camera:
         return Rgb(ctx.camera.importance(v.p, w));
@@ -125,7 +156,10 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         // The camera ray (a camera subpath's first segment) follows its neighbours: the coherent kernel.
         bool cameraRay = mode == TransportMode::Radiance && out.size() == 1;
         bool found = cameraRay ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit);
-        PathVertex v;
+        // Built in place at the end of the sub-path (no copy of a vertex per bounce); `out` keeps
+        // its capacity between samples (the callers' thread-local vectors).
+        const size_t n = out.size();
+        PathVertex& v = out.emplace_back();
         if (found) {
             SurfaceInteraction si = scene.interaction(ray, hit);
             v.type = VertexType::Surface;
@@ -139,7 +173,10 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         } else {
             // A camera ray that escapes reaches the environment: the sub-path ends with a vertex at
             // infinity, the s = 0 strategy's emitter (pbrt-v3 §16.3.2). Light sub-paths just end.
-            if (mode != TransportMode::Radiance || !scene.lights().hasEnvironment()) break;
+            if (mode != TransportMode::Radiance || !scene.lights().hasEnvironment()) {
+                out.pop_back();
+                break;
+            }
             v.type = VertexType::Light;
             v.atInfinity = true;
             v.ng = v.ns = glm::normalize(ray.d);
@@ -149,7 +186,7 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         // The segment just traced: Beer–Lambert inside a volume (the same rule as the connections).
         // Roulette keeps looking at the BSDF weights only (as in pt).
         bool attenuates;
-        Rgb T = segmentTransmittance(ctx, out.back(), v, attenuates);
+        Rgb T = segmentTransmittance(ctx, out[n - 1], v, attenuates);
         if (attenuates) beta *= T;
         v.beta = beta;
         // Densities are evaluated from the vertex positions rather than taken from the sampling
@@ -157,13 +194,17 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         // the same p→/p← for a vertex and the weights sum to one to rounding (grazing cosine-
         // hemisphere samples otherwise differ by a few percent). After a delta scattering the
         // density is the delta's unit weight converted to area (deltaDensityA).
-        const size_t n = out.size();
         const PathVertex& prev = out[n - 1];
-        v.pdfFwdA = prev.delta ? deltaDensityA(prev, v) : pdfNextA(ctx, n >= 2 ? &out[n - 2] : nullptr, prev, v);
         // The successor now exists: the density of the predecessor's predecessor being sampled
         // from `prev` given `v` (Veach's p←), i.e. pdfRevA of out[n − 2].
-        if (n >= 2) out[n - 2].pdfRevA = prev.delta ? deltaDensityA(prev, out[n - 2]) : pdfNextA(ctx, &v, prev, out[n - 2]);
-        out.push_back(v);
+        if (prev.delta) {
+            v.pdfFwdA = deltaDensityA(prev, v);
+            if (n >= 2) out[n - 2].pdfRevA = deltaDensityA(prev, out[n - 2]);
+        } else if (n >= 2) {
+            pdfBothWaysA(ctx, out[n - 2], prev, v, v.pdfFwdA, out[n - 2].pdfRevA);
+        } else {
+            v.pdfFwdA = pdfNextA(ctx, nullptr, prev, v);
+        }
         if (!found || int(out.size()) >= limit) break;
 
         PathVertex& cur = out.back();

@@ -79,6 +79,11 @@ inline float deltaDensityA(const PathVertex& cur, const PathVertex& next) { retu
 /// Area density at `next` of `cur` sampling `next`, given that `cur` was reached from `prev`
 /// (ignored for camera and light vertices): the BSDF, camera or light-emission direction density.
 float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next);
+/// pdfNextA(&a, cur, b) and pdfNextA(&b, cur, a) at once, bit-identical to the two calls: for a
+/// surface vertex both densities share one BSDF, frame and side test (the walks and the connection
+/// weights need both densities of the same vertex pair).
+void pdfBothWaysA(const RenderContext& ctx, const PathVertex& a, const PathVertex& cur, const PathVertex& b, float& pdfToBA,
+                  float& pdfToAA);
 /// For a vertex on an emitter (light vertex, or a surface vertex with lightIndex): pdfPosA of the
 /// light sub-path starting there (selection included); for a vertex at infinity the solid-angle
 /// density of its direction (selection included).
@@ -97,6 +102,8 @@ Rgb segmentTransmittance(const RenderContext& ctx, const PathVertex& a, const Pa
 /// The "f" of a vertex towards `next` in a connection: BSDF (adjoint for importance, with the
 /// shading correction), emitted radiance / intensity for light vertices, importance We for the camera.
 Rgb evalVertex(const RenderContext& ctx, const PathVertex& v, const PathVertex& next, TransportMode mode);
+/// evalVertex with the unit direction towards `next` already known (w == directionTo(v, next), non-zero).
+Rgb evalVertexTowards(const RenderContext& ctx, const PathVertex& v, const Vec3f& w, TransportMode mode);
 /// Emitted radiance of a surface vertex lying on a light, towards its predecessor, or of the
 /// environment a camera sub-path escaped to (s = 0 strategy).
 Rgb emittedAt(const RenderContext& ctx, const PathVertex& v);

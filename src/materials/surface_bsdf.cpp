@@ -30,6 +30,14 @@ float SurfaceBsdf::pdfFwdW(const Vec3f& wo, const Vec3f& wi) const {
     return pdfBsdfW(mat_, frame_.toLocal(wo), frame_.toLocal(wi));
 }
 
+void SurfaceBsdf::pdfBothW(const Vec3f& wo, const Vec3f& wi, float& pdfFwdW, float& pdfRevW) const {
+    pdfFwdW = pdfRevW = 0.f;
+    if (isDelta() || !sidesAgree(wo, wi)) return;
+    Vec3f woL = frame_.toLocal(wo), wiL = frame_.toLocal(wi);
+    pdfFwdW = pdfBsdfW(mat_, woL, wiL);
+    pdfRevW = pdfBsdfW(mat_, wiL, woL);
+}
+
 Rgb SurfaceBsdf::evalWithPdf(const Vec3f& wo, const Vec3f& wi, TransportMode mode, float& pdfFwdW) const {
     pdfFwdW = 0.f;
     if (isDelta() || !sidesAgree(wo, wi)) return Rgb(0.f);

@@ -39,6 +39,9 @@ public:
     Rgb eval(const Vec3f& woWorld, const Vec3f& wiWorld, TransportMode mode) const;
     /// Solid-angle density of sampling wi given wo through the non-delta lobes (0 for delta materials).
     float pdfFwdW(const Vec3f& woWorld, const Vec3f& wiWorld) const;
+    /// pdfFwdW(wo, wi) and pdfFwdW(wi, wo) (the reverse density) with one change of frame and one
+    /// side test (the test is symmetric in wo and wi).
+    void pdfBothW(const Vec3f& woWorld, const Vec3f& wiWorld, float& pdfFwdW, float& pdfRevW) const;
     /// eval and pdfFwdW together, with one change of frame and one side test: what light sampling
     /// needs to weight its sample against BSDF sampling.
     Rgb evalWithPdf(const Vec3f& woWorld, const Vec3f& wiWorld, TransportMode mode, float& pdfFwdW) const;
