@@ -98,6 +98,11 @@ Scene loadScene(const SceneOptions& a) {
     return scene;
 }
 
+void addSamplerOption(CLI::App& cmd, SceneOptions& o) {
+    cmd.add_option("--sampler", o.sampler,
+                   "random numbers: sobol (Owen-scrambled Sobol', default) or independent (PCG32 per sample)");
+}
+
 RenderSettings resolveSettings(const SceneOptions& a, Scene& scene) {
     RenderSettings s = scene.settings;
     applyEnvironmentOptions(a, scene);
@@ -105,6 +110,11 @@ RenderSettings resolveSettings(const SceneOptions& a, Scene& scene) {
     if (a.spp > 0) s.spp = a.spp;
     if (a.maxDepth) s.maxDepth = *a.maxDepth;
     if (a.seed >= 0) s.seed = uint64_t(a.seed);
+    if (!a.sampler.empty()) {
+        std::optional<SamplerKind> kind = parseSamplerKind(a.sampler);
+        if (!kind) throw InputError("--sampler: unknown sampler '" + a.sampler + "' (sobol, independent)");
+        s.sampler = *kind;
+    }
     if (!a.integrator.empty()) s.integrator = a.integrator;
 
     if (!a.lookAt.empty()) {
@@ -142,6 +152,7 @@ io::Metadata imageMetadata(const std::string& scenePath, const RenderSettings& s
         {"tessera:spp", std::to_string(f.spp)},
         {"tessera:samples", std::to_string(f.samples)},
         {"tessera:seed", std::to_string(s.seed)},
+        {"tessera:sampler", std::string(samplerName(s.sampler))},
         {"tessera:max_depth", std::to_string(s.maxDepth)},
         {"tessera:resolution", std::to_string(s.width) + "x" + std::to_string(s.height)},
         {"tessera:render_seconds", std::to_string(f.seconds)},
