@@ -18,32 +18,20 @@
 ///  * `independent`: one PCG32 stream per (pixel, sample index, seed); the start* calls are no-ops.
 #include <algorithm>
 #include <cstdint>
-#include <optional>
-#include <string_view>
 
 #include "core/math.h"
 #include "core/rng.h"
+#include "core/sampler_kind.h"
 #include "core/sobol_matrices.h"
 
 namespace tessera {
 
-enum class SamplerKind : uint8_t { Sobol, Independent };
-
-inline constexpr SamplerKind kDefaultSampler = SamplerKind::Sobol;
-
-inline std::string_view samplerName(SamplerKind k) { return k == SamplerKind::Sobol ? "sobol" : "independent"; }
-inline std::optional<SamplerKind> parseSamplerKind(std::string_view name) {
-    if (name == "sobol") return SamplerKind::Sobol;
-    if (name == "independent") return SamplerKind::Independent;
-    return std::nullopt;
-}
-
+/// Bit reversal: byte swap, then the bits within each byte (three masked swaps).
 inline uint32_t reverseBits32(uint32_t v) {
-    v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
-    v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
+    v = __builtin_bswap32(v);
     v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
-    v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
-    return (v >> 16) | (v << 16);
+    v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
+    return ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
 }
 
 /// Laine-Karras style hash in which each output bit depends only on the input bits at or below it
@@ -72,10 +60,38 @@ inline uint32_t sobolBits(uint32_t index, int dim) {
     return v;
 }
 
+/// The Sobol' matrices with bit-reversed columns, as 4 byte-indexed tables per dimension:
+/// sobolReversedBits(i, d) = reverseBits32(sobolBits(i, d)) in 4 look-ups instead of a loop over the
+/// index's bits (a shuffled index has all 32 bits set at random).
+struct SobolReversedTables {
+    uint32_t byteTable[kSobolDimensions][4][256];
+};
+constexpr SobolReversedTables makeSobolReversedTables() {
+    SobolReversedTables t{};
+    for (int d = 0; d < kSobolDimensions; ++d)
+        for (int b = 0; b < 4; ++b)
+            for (uint32_t v = 0; v < 256; ++v) {
+                uint32_t x = 0;
+                for (int j = 0; j < 8; ++j)
+                    if (v & (1u << j)) {
+                        // Reversed column of index bit 8b + j.
+                        uint32_t c = kSobolMatrices[d][8 * b + j], r = 0;
+                        for (int k = 0; k < 32; ++k) r |= ((c >> k) & 1u) << (31 - k);
+                        x ^= r;
+                    }
+                t.byteTable[d][b][v] = x;
+            }
+    return t;
+}
+inline constexpr SobolReversedTables kSobolReversedTables = makeSobolReversedTables();
+
+inline uint32_t sobolReversedBits(uint32_t index, int dim) {
+    const auto& t = kSobolReversedTables.byteTable[dim];
+    return t[0][index & 0xffu] ^ t[1][(index >> 8) & 0xffu] ^ t[2][(index >> 16) & 0xffu] ^ t[3][index >> 24];
+}
+
 /// [0, 1) float from the top 24 bits of a 32-bit fraction (never rounds up to 1).
 inline float bitsToUnitFloat(uint32_t v) { return float(v >> 8) * 0x1p-24f; }
-
-inline uint32_t hash32(uint64_t v) { return uint32_t(mixBits(v)); }
 
 class Sampler {
 public:
@@ -90,6 +106,7 @@ public:
         uint64_t pixelKey = (uint64_t(uint32_t(pixel.y)) << 32) | uint32_t(pixel.x);
         pixelSeed_ = hashCombine(pixelKey, seed);
         if (kind == SamplerKind::Independent) rng_.seed(pixelSeed_, mixBits(sampleIndex));
+        else reversedIndex_ = reverseBits32(sampleIndex);
     }
 
     SamplerKind kind() const { return kind_; }
@@ -111,13 +128,16 @@ public:
     /// The draws of connection strategy (s, t): the resampled light point or lens point.
     void startConnection(int s, int t) { open(kConnectBlock | (clampId(s, 4095) << 12) | clampId(t, 4095), s + t < kSobolDepth); }
 
+    // Both draws compute owenScramble(sobolBits(idx, d), seed) as
+    // reverseBits32(laineKarrasPermutation(sobolReversedBits(idx, d), seed)), with the shuffled index
+    // idx = owenScramble(index, seed') = reverseBits32(laineKarrasPermutation(reversed index, seed')).
     float get1D() {
         if (kind_ == SamplerKind::Independent) return rng_.nextFloat();
         uint32_t slot = slot_++;
         if (!sobol_ || slot >= kBlockSlots) return fallback(slot).x;
         uint64_t h = dimensionHash(slot);
-        uint32_t idx = owenScramble(index_, uint32_t(h));
-        return bitsToUnitFloat(owenScramble(sobolBits(idx, 0), uint32_t(h >> 32)));
+        uint32_t idx = reverseBits32(laineKarrasPermutation(reversedIndex_, uint32_t(h)));
+        return bitsToUnitFloat(reverseBits32(laineKarrasPermutation(idx, uint32_t(h >> 32))));
     }
 
     Vec2f get2D() {
@@ -128,11 +148,13 @@ public:
         // one 4D point. Elsewhere each draw is padded: dimensions (0,1) with its own shuffle.
         bool camera = block_ == kCameraBlock;
         uint64_t h = dimensionHash(camera ? 0 : slot);
-        uint32_t idx = owenScramble(index_, uint32_t(h));
+        uint32_t idx = reverseBits32(laineKarrasPermutation(reversedIndex_, uint32_t(h)));
         int d0 = camera ? int(2 * slot) : 0;
-        uint32_t sx = uint32_t(h >> 32) + (camera ? slot * 0x9e3779b9u : 0u);
-        return {bitsToUnitFloat(owenScramble(sobolBits(idx, d0), hash32(uint64_t(sx) << 1))),
-                bitsToUnitFloat(owenScramble(sobolBits(idx, d0 + 1), hash32((uint64_t(sx) << 1) | 1u)))};
+        // Per-coordinate scramble seeds: the hash's high half and a multiplicative remix of it.
+        uint64_t hs = (h >> 32) * 0x9e3779b97f4a7c15ULL + (camera ? slot : 0u) * 0xd1b54a32d192ed03ULL;
+        uint32_t sx = uint32_t(hs >> 32), sy = uint32_t(mixBits(hs));
+        return {bitsToUnitFloat(reverseBits32(laineKarrasPermutation(sobolReversedBits(idx, d0), sx))),
+                bitsToUnitFloat(reverseBits32(laineKarrasPermutation(sobolReversedBits(idx, d0 + 1), sy)))};
     }
 
 private:
@@ -145,7 +167,8 @@ private:
         slot_ = 0;
         sobol_ = sobol;
     }
-    uint64_t dimensionHash(uint32_t slot) const { return hashCombine(pixelSeed_, (uint64_t(block_) << 8) | slot); }
+    /// One mix of the pixel's seed and the dimension key (block, slot): keys are distinct per draw.
+    uint64_t dimensionHash(uint32_t slot) const { return mixBits(pixelSeed_ ^ (((uint64_t(block_) << 8) | slot) * 0x9e3779b97f4a7c15ULL)); }
     /// Independent numbers keyed by (pixel, seed, sample index, block, slot).
     Vec2f fallback(uint32_t slot) const {
         uint64_t v = mixBits(hashCombine(dimensionHash(slot), index_) ^ 0x5851f42d4c957f2dULL);
@@ -153,7 +176,7 @@ private:
     }
 
     uint64_t pixelSeed_ = 0;
-    uint32_t index_ = 0;
+    uint32_t index_ = 0, reversedIndex_ = 0;
     SamplerKind kind_;
     uint32_t block_ = kCameraBlock, slot_ = 0;
     bool sobol_ = true;

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "core/sampler.h"
+#include "core/sampler_kind.h"
 #include "geometry/hit.h"
 #include "geometry/shapes.h"
 #include "materials/material.h"
