@@ -45,6 +45,8 @@ def parse(argv):
                    help="render no reference chunk: use the mean of the chunks already in --out (at least one)")
     p.add_argument("--repeats", type=int, default=1)
     p.add_argument("--out", default=os.path.join(ROOT, "out", "cycles"))
+    p.add_argument("--score-only", action="store_true",
+                   help="render nothing: score the renders listed in --out's runs file (written before scoring)")
     p.add_argument("--blender", default="blender")
     p.add_argument("--tessera", default=os.path.join(os.environ.get("TESSERA_BUILD", os.path.join(ROOT, "build")), "src", "tessera"))
     return p.parse_args(argv)
@@ -125,8 +127,12 @@ def main(argv):
     a.ref_resolution = a.ref_resolution or a.resolution
     os.makedirs(a.out, exist_ok=True)
     stem = os.path.splitext(os.path.basename(a.scene))[0]
+    runs_path = os.path.join(a.out, f"{stem}-runs.json")
     runs = []
-    for spp in a.spps:
+    if a.score_only:
+        with open(runs_path) as f:
+            runs = json.load(f)["runs"]
+    for spp in [] if a.score_only else a.spps:
         for rep in range(a.repeats):
             for who in [f"tessera-{s}" for s in a.samplers] + ["cycles"]:
                 seed = 1 + rep * 1000 + spp
@@ -138,6 +144,8 @@ def main(argv):
                 runs.append({"who": who, "spp": spp, "repeat": rep, "seed": seed, "seconds": j["seconds"], "out": out,
                              "command": j["command"]})
                 log(f"  {who:<20} spp {spp:>5} rep {rep}: {j['seconds']:8.2f} s")
+    with open(runs_path, "w") as f:
+        json.dump({"runs": runs, "argv": argv}, f, indent=1)
     # The reference after the timed renders (it may still be rendering when they start: --ref-existing).
     ref, ref_spp = reference(a, stem)
     for row in runs:
@@ -146,7 +154,7 @@ def main(argv):
     # Means: Tessera's largest-spp sobol render against the Cycles reference.
     c = compare(a, [r for r in runs if r["who"] != "cycles" and r["spp"] == max(a.spps)][0]["out"], ref)
     log(f"cycles_compare: means check: {json.dumps(c)}")
-    with open(os.path.join(a.out, f"{stem}-runs.json"), "w") as f:
+    with open(runs_path, "w") as f:
         json.dump({"means_check": c, "reference_spp": ref_spp, "runs": runs, "argv": argv}, f, indent=1)
 
     whos = [f"tessera-{s}" for s in a.samplers] + ["cycles"]
