@@ -88,7 +88,7 @@ SampleReplay replaySample(const RenderContext& ctx, const Integrator& integrator
     TracingAccel accel(ctx.accel, ctx.scene, trace, record);
     RenderContext traced{ctx.scene, accel, ctx.camera, ctx.maxDepth, &record};
     trace << "tessera: debug: replaying pixel (" << id.x << "," << id.y << ") sample " << id.sample << " seed " << seed
-          << " sampler " << samplerName(samplerKind) << " with " << integrator.name() << "\n";
+          << " with " << integrator.name() << " (sampler " << samplerName(samplerKind) << ")\n";
     // Exactly the renderer's sequence: Sampler(pixel, sample, seed, kind), jitter from its first 2D draw.
     Sampler sampler(Vec2i(id.x, id.y), id.sample, seed, samplerKind);
     Vec2f raster = Vec2f(float(id.x), float(id.y)) + sampler.get2D();
