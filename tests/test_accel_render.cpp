@@ -17,7 +17,11 @@ using namespace tessera;
 namespace {
 
 std::vector<float> renderWith(const Scene& scene, const std::string& accelName, const std::string& integratorName) {
-    test::TestRender r = test::renderScene(scene, integratorName, 64, 48, RenderOptions{.spp = 8, .threads = 2, .seed = 11}, accelName);
+    // The independent sampler: the bounds below were measured on these paths (none meets a grazing
+    // hit where Embree's rounding flips a visibility test), which the structures, not the
+    // sampler, are tested on.
+    test::TestRender r = test::renderScene(scene, integratorName, 64, 48,
+                                           RenderOptions{.spp = 8, .threads = 2, .seed = 11, .sampler = SamplerKind::Independent}, accelName);
     EXPECT_EQ(r.stats.nonFiniteDropped, 0u) << accelName;
     return r.film.rgba();
 }

@@ -5,7 +5,7 @@
 
 #include "core/frame.h"
 #include "core/ray.h"
-#include "core/rng.h"
+#include "core/sampler.h"
 #include "core/sampling.h"
 
 using namespace tessera;

@@ -168,10 +168,10 @@ TEST(NonFinite, DroppedCountedAndFirstNamedForAnyThreadCount) {
 
     // The replay of that sample finds the same NaN, and says where it arose.
     std::ostringstream trace;
-    SampleReplay r = replaySample(ctx, integrator, *stats.firstNonFinite, 9, trace);
+    SampleReplay r = replaySample(ctx, integrator, *stats.firstNonFinite, 9, kDefaultSampler, trace);
     EXPECT_FALSE(r.finite);
     EXPECT_NE(trace.str().find("first non-finite value: the returned radiance"), std::string::npos) << trace.str();
-    SampleReplay fine = replaySample(ctx, integrator, SampleId{30, 1, 3}, 9, trace);
+    SampleReplay fine = replaySample(ctx, integrator, SampleId{30, 1, 3}, 9, kDefaultSampler, trace);
     EXPECT_TRUE(fine.finite);
     EXPECT_EQ(fine.radiance, Rgb(0.25f));
 }

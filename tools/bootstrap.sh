@@ -38,6 +38,9 @@ tessera_packages_fresh=(mmdebstrap zstd)
 # slurm: tools/local_slurm.sh runs a one-node Slurm (slurmctld, slurmd, sbatch) with MUNGE
 # authentication for the farm test (tests/test_farm_slurm.sh, `tessera farm`).
 tessera_packages_slurm=(slurm-wlm munge)
+# cycles: tools/cycles_compare.py renders the Cornell box with Blender's Cycles (blender -b -P
+# tools/cycles_render.py) for the equal-time comparison in writeup.md.
+tessera_packages_cycles=(blender python3 python3-numpy python3-openimageio)
 
 # A package counts as present when dpkg has it installed; a few count as present when the command
 # they provide is on PATH from elsewhere (a machine with Node.js's own packages has npm without
@@ -54,8 +57,8 @@ tessera_group_packages() {  # group... -> the packages, one a line
   local g
   for g in "$@"; do
     case "$g" in
-      build|assets|study|fuzz|fresh|slurm) eval 'printf "%s\n" "${tessera_packages_'"$g"'[@]}"' ;;
-      *) echo "tools/bootstrap.sh: unknown package group '$g' (build, assets, study, fuzz, fresh, slurm)" >&2; return 2 ;;
+      build|assets|study|fuzz|fresh|slurm|cycles) eval 'printf "%s\n" "${tessera_packages_'"$g"'[@]}"' ;;
+      *) echo "tools/bootstrap.sh: unknown package group '$g' (build, assets, study, fuzz, fresh, slurm, cycles)" >&2; return 2 ;;
     esac
   done
 }
@@ -94,7 +97,7 @@ if [ "${BASH_SOURCE[0]}" = "$0" ]; then
   case "${1:-}" in
     --install) shift; tessera_install_packages "$@" ;;
     --list) shift; tessera_group_packages "$@" ;;
-    *) echo "usage: tools/bootstrap.sh --install GROUP... | --list GROUP...   (groups: build assets study fuzz fresh)" >&2; exit 2 ;;
+    *) echo "usage: tools/bootstrap.sh --install GROUP... | --list GROUP...   (groups: build assets study fuzz fresh slurm cycles)" >&2; exit 2 ;;
   esac
 else
   tessera_install_packages build

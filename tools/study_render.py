@@ -33,14 +33,21 @@ class Tessera:
     def integrators(self):
         return self._names("light transport algorithm")
 
+    def samplers(self):
+        return ["sobol", "independent"]
+
     def accels(self):
         return self._names("acceleration structure")
 
     def render(self, scene, out, integrator, accel, spp, seed, resolution, max_depth=None):
-        """One render; returns the parsed --json object (raises RenderError on failure or timeout)."""
+        """One render; returns the parsed --json object (raises RenderError on failure or timeout).
+        `integrator` is a series label: a name, or NAME/SAMPLER (e.g. ptnee/independent)."""
+        name, _, sampler = integrator.partition("/")
         cmd = [self.binary, "render", scene, "-o", out, "--no-png", "--quiet", "--json",
-               "--integrator", integrator, "--accel", accel, "--spp", str(spp), "--seed", str(seed),
+               "--integrator", name, "--accel", accel, "--spp", str(spp), "--seed", str(seed),
                "--threads", str(self.threads)]
+        if sampler:
+            cmd += ["--sampler", sampler]
         if resolution is not None:
             cmd += ["--resolution", f"{resolution[0]}x{resolution[1]}"]
         if max_depth is not None:

@@ -270,6 +270,8 @@ def run(args, tess, refs, notes, argv):
     t_start = time.time()
     args.binary = tess.binary
     integrators = args.integrators or tess.integrators()
+    if args.samplers:
+        integrators = [f"{i}/{s}" for i in integrators for s in args.samplers]
     accels = args.accels or (["embree", "bvh"] if args.quick else tess.accels())
     if DEFAULT_ACCEL not in accels:
         accels = [DEFAULT_ACCEL] + accels

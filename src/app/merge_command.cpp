@@ -45,6 +45,7 @@ io::Metadata mergedMetadata(const MergedRender& m, size_t partCount) {
         {"tessera:spp", std::to_string(m.spp)},
         {"tessera:samples", std::to_string(m.samples)},
         {"tessera:seed", setting(h, "seed")},
+        {"tessera:sampler", setting(h, "sampler")},
         {"tessera:max_depth", setting(h, "max_depth")},
         {"tessera:resolution", setting(h, "resolution")},
         {"tessera:render_seconds", std::to_string(m.seconds)},

@@ -38,13 +38,13 @@ SampleId parseDebugPixel(const std::string& text, int width, int height) {
 /// `--debug-pixel x,y,s`: replays one sample with a trace on stderr and prints its radiance.
 int runDebugPixel(const RenderArgs& a, const RenderContext& ctx, const Integrator& integrator, const RenderSettings& s) {
     SampleId id = parseDebugPixel(a.debugPixel, s.width, s.height);
-    SampleReplay r = replaySample(ctx, integrator, id, s.seed, std::cerr);
+    SampleReplay r = replaySample(ctx, integrator, id, s.seed, s.sampler, std::cerr);
     if (a.json) {
         nlohmann::json splats = nlohmann::json::array();
         for (const SplatSink::Entry& e : r.splats) splats.push_back({e.pixelIndex, {e.value.r, e.value.g, e.value.b}});
         // Non-finite floats become null in JSON: "finite" says which.
         std::cout << nlohmann::json{{"pixel", {id.x, id.y}}, {"sample", id.sample}, {"seed", s.seed},
-                                    {"radiance", {r.radiance.r, r.radiance.g, r.radiance.b}}, {"finite", r.finite},
+                                    {"sampler", samplerName(s.sampler)}, {"radiance", {r.radiance.r, r.radiance.g, r.radiance.b}}, {"finite", r.finite},
                                     {"rays", r.rays}, {"trace_records", r.vertices}, {"splats", splats}}.dump()
                   << std::endl;
     } else {
@@ -69,6 +69,7 @@ void printJson(const RenderArgs& a, const RenderSettings& s, const Accel& accel,
         {"resolution", {s.width, s.height}},
         {"threads", stats.threads},
         {"seed", s.seed},
+        {"sampler", samplerName(s.sampler)},
         {"outputs", !a.samples.empty() ? nlohmann::json{{"partial", out.exr}}
                     : out.png.empty()  ? nlohmann::json{{"exr", out.exr}}
                                        : nlohmann::json{{"exr", out.exr}, {"png", out.png}}},
@@ -126,6 +127,7 @@ Runner addRenderCommand(CLI::App& app) {
         ->check(CLI::PositiveNumber)->excludes(spp);
     cmd->add_option("--threads", a->threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
     cmd->add_option("--seed", a->seed, "random seed (default: the scene's, else 0)")->check(CLI::NonNegativeNumber);
+    addSamplerOption(*cmd, *a);
     cmd->add_option("--resolution", a->resolution, "image size WxH, e.g. 640x480 (default: the scene's)");
     cmd->add_option("--integrator", a->integrator, "light transport algorithm: " + joined(integratorNames()) + " (default: ptnee)");
     cmd->add_option("--accel", a->accel, "acceleration structure: " + joined(accelNames()) + " (default: embree)");

@@ -77,6 +77,7 @@ CheckpointHeader checkpointHeader(const RenderJob& a, const RenderSettings& s, c
         {"scene_hash", fnv1a64OfFile(a.scene)},
         {"integrator", std::string(integrator.name())},
         {"seed", std::to_string(s.seed)},
+        {"sampler", std::string(samplerName(s.sampler))},
         {"resolution", std::to_string(s.width) + "x" + std::to_string(s.height)},
         {"spp_target", a.timeLimit > 0 ? "time-bounded" : std::to_string(s.spp)},
         {"max_depth", std::to_string(s.maxDepth)},
@@ -181,7 +182,7 @@ RenderStats renderSampleRange(const RenderJob& a, const JobPlan& plan, const Ren
                               const std::string& label) {
     const RenderSettings& s = plan.settings;
     SampleRange range = parseSampleRange(a.samples, "--samples");
-    RenderOptions ro{.spp = int(range.end), .firstSample = range.begin, .threads = a.threads, .seed = s.seed};
+    RenderOptions ro{.spp = int(range.end), .firstSample = range.begin, .threads = a.threads, .seed = s.seed, .sampler = s.sampler};
     InterruptGuard guard;
     ro.cancel = &interruptFlag();
     ProgressReporter progress(label + " samples " + range.str(), uint64_t(s.width) * uint64_t(s.height) * (range.end - range.begin),
@@ -238,7 +239,7 @@ RenderJobResult runRenderJob(const RenderJob& a, const JobPlan& plan, const Scen
                                                    accel.stats().buildSeconds, ""};
 
     Film film(s.width, s.height);
-    RenderOptions ro{.spp = s.spp, .timeLimitSeconds = a.timeLimit, .threads = a.threads, .seed = s.seed};
+    RenderOptions ro{.spp = s.spp, .timeLimitSeconds = a.timeLimit, .threads = a.threads, .seed = s.seed, .sampler = s.sampler};
     ro.stopAfterTiles = a.stopAfterTiles;
     Checkpoints checkpoints(a, out.exr, checkpointHeader(a, s, plan.camera, integrator, ro.tileSize));
     checkpoints.attach(a, film, ro);

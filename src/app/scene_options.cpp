@@ -98,12 +98,22 @@ Scene loadScene(const SceneOptions& a) {
     return scene;
 }
 
+void addSamplerOption(CLI::App& cmd, SceneOptions& o) {
+    cmd.add_option("--sampler", o.sampler,
+                   "random numbers: sobol (Owen-scrambled Sobol', default) or independent (PCG32 per sample)");
+}
+
 RenderSettings resolveRenderSettings(const SceneOptions& a, const Scene& scene) {
     RenderSettings s = scene.settings;
     if (!a.resolution.empty()) parseResolution(a.resolution, s.width, s.height);
     if (a.spp > 0) s.spp = a.spp;
     if (a.maxDepth) s.maxDepth = *a.maxDepth;
     if (a.seed >= 0) s.seed = uint64_t(a.seed);
+    if (!a.sampler.empty()) {
+        std::optional<SamplerKind> kind = parseSamplerKind(a.sampler);
+        if (!kind) throw InputError("--sampler: unknown sampler '" + a.sampler + "' (sobol, independent)");
+        s.sampler = *kind;
+    }
     if (!a.integrator.empty()) s.integrator = a.integrator;
     return s;
 }
@@ -152,6 +162,7 @@ io::Metadata imageMetadata(const std::string& scenePath, const RenderSettings& s
         {"tessera:spp", std::to_string(f.spp)},
         {"tessera:samples", std::to_string(f.samples)},
         {"tessera:seed", std::to_string(s.seed)},
+        {"tessera:sampler", std::string(samplerName(s.sampler))},
         {"tessera:max_depth", std::to_string(s.maxDepth)},
         {"tessera:resolution", std::to_string(s.width) + "x" + std::to_string(s.height)},
         {"tessera:render_seconds", std::to_string(f.seconds)},

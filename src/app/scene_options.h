@@ -11,6 +11,10 @@
 #include "io/image_output.h"
 #include "scene/scene.h"
 
+namespace CLI {
+class App;
+}
+
 namespace tessera::app {
 
 /// The scene options of both commands (each registers them on its own command line).
@@ -21,10 +25,14 @@ struct SceneOptions {
     int spp = 0;                   ///< 0: the scene's
     std::optional<int> maxDepth;   ///< --max-depth; unset: the scene's
     int64_t seed = -1;             ///< < 0: the scene's
+    std::string sampler;           ///< --sampler sobol|independent; empty: sobol
     double fovDeg = 0.0;           ///< 0: the camera's
     bool allowExternalFiles = false;
     double maxMemoryGiB = 16.0;    ///< input files and the film
 };
+
+/// Registers `--sampler` (render and view).
+void addSamplerOption(CLI::App& cmd, SceneOptions& o);
 
 /// "a,b,c" → numbers; InputError naming `option` on anything else.
 std::vector<float> parseNumbers(const std::string& text, const std::string& option);

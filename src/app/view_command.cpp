@@ -210,6 +210,7 @@ private:
         p.height = s.height;
         p.threads = a.threads;
         p.seed = s.seed;
+        p.sampler = s.sampler;
         p.maxDepth = s.maxDepth;
         p.sppLimit = uint32_t(std::max(0, a.spp));
         return p;
@@ -310,7 +311,7 @@ private:
         view::PreviewCounters c = session_.counters();
         Vec3f eye = fly_.eye();
         std::cout << "tessera render " << a_.scene << " " << fly_.renderArguments() << " --resolution " << settings_.width << "x"
-                  << settings_.height << " --integrator " << session_.integrator() << " --seed " << settings_.seed << " --spp "
+                  << settings_.height << " --integrator " << session_.integrator() << " --seed " << settings_.seed << " --sampler " << samplerName(settings_.sampler) << " --spp "
                   << (full ? full->spp : 1) << "\n";
         std::cout << "view-status spp=" << (full ? full->spp : 0) << " samples=" << (full ? full->samples : 0)
                   << " wall_seconds=" << (full ? full->wallSeconds : 0.0) << " render_seconds=" << (full ? full->renderSeconds : 0.0)
@@ -388,6 +389,7 @@ Runner addViewCommand(CLI::App& app) {
     cmd->add_option("--spp", a->spp, "stop refining at this many samples per pixel (default: never)")->check(CLI::Range(1, 1 << 30));
     cmd->add_option("--threads", a->threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
     cmd->add_option("--seed", a->seed, "random seed (default: the scene's, else 0)")->check(CLI::NonNegativeNumber);
+    addSamplerOption(*cmd, *a);
     cmd->add_option("--resolution", a->resolution, "window and image size WxH (default: the scene's)");
     cmd->add_option("--integrator", a->integrator, "light transport algorithm: " + joined(integratorNames()) + " (default: ptnee)");
     cmd->add_option("--accel", a->accel, "acceleration structure: " + joined(accelNames()) + " (default: embree)");

@@ -1,8 +1,8 @@
 #pragma once
 /// \file rng.h
 /// PCG32 random numbers (O'Neill 2014, "PCG: A Family of Simple Fast Space-Efficient Statistically
-/// Good Algorithms for Random Number Generation") and the hashing that seeds one stream per
-/// (pixel, sample index, seed): every sample is reproducible whatever thread renders it.
+/// Good Algorithms for Random Number Generation") and the hashing that seeds the samplers
+/// (core/sampler.h).
 #include <cstdint>
 
 #include "core/math.h"
@@ -52,21 +52,6 @@ public:
 
 private:
     uint64_t state_ = 0, inc_ = 1;
-};
-
-/// The random stream of one camera sample. Seeded from (pixel, sample index, user seed) only, so a
-/// sample's value never depends on scheduling (pbrt-v4 StartPixelSample, Tungsten startPath).
-class Sampler {
-public:
-    Sampler(Vec2i pixel, uint32_t sampleIndex, uint64_t seed) {
-        uint64_t pixelKey = (uint64_t(uint32_t(pixel.y)) << 32) | uint32_t(pixel.x);
-        rng_.seed(hashCombine(pixelKey, seed), mixBits(sampleIndex));
-    }
-    float get1D() { return rng_.nextFloat(); }
-    Vec2f get2D() { return rng_.next2D(); }
-
-private:
-    Pcg32 rng_;
 };
 
 }  // namespace tessera

@@ -122,6 +122,7 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
                              int s, int t, Sampler& sampler, MisHeuristic heuristic, bool computeWeight) {
     ConnectionResult r;
     if (t < 1 || s + t < 2) return r;
+    sampler.startConnection(s, t);
     PathVertex sampled;  // the resampled endpoint for s = 1 or t = 1
     // For s = 1 the light point is resampled below: the light sub-path may even be empty.
     const PathVertex* qs = s > 0 && size_t(s) <= light.size() ? &light[size_t(s - 1)] : nullptr;

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "accel/accel.h"
-#include "core/rng.h"
+#include "core/sampler.h"
 #include "scene/camera.h"
 #include "scene/scene.h"
 

@@ -34,6 +34,7 @@ Rgb LtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler&
     }
     const LightSet& lights = ctx.scene.lights();
     if (!lights.hasEnvironment()) return Rgb(0.f);  // no random numbers drawn: scenes without one are unchanged
+    sampler.startLens();
     Ray ray = ctx.camera.generateRay(raster, sampler.get2D());
     Hit hit;
     if (ctx.accel.intersectCoherent(ray, hit)) return Rgb(0.f);

@@ -7,7 +7,7 @@
 /// The callers weight the sample differently (ptnee against BSDF sampling of the same vertex,
 /// BDPT against every (s, t) strategy of the path), so the weights stay with them.
 #include "accel/accel.h"
-#include "core/rng.h"
+#include "core/sampler.h"
 #include "scene/lights.h"
 
 namespace tessera {

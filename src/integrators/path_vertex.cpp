@@ -210,6 +210,8 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         PathVertex& cur = out.back();
         SurfaceBsdf bsdf(cur.bsdf, cur.ns, cur.ng);
         SurfaceBsdfSample bs;
+        if (mode == TransportMode::Radiance) sampler.startBounce(int(out.size()) - 2);
+        else sampler.startLightBounce(int(out.size()) - 2);
         float uLobe = sampler.get1D();
         Vec2f uDir = sampler.get2D();
         if (!bsdf.sample(cur.woWorld, uLobe, uDir, mode, bs)) break;
@@ -246,6 +248,7 @@ void traceLightSubpath(const RenderContext& ctx, Sampler& sampler, int maxVertic
     out.clear();
     const LightSet& lights = ctx.scene.lights();
     if (maxVertices == 0 || lights.empty()) return;
+    sampler.startLightPath();
     float uPick = sampler.get1D();
     Vec2f uPos = sampler.get2D();
     Vec2f uDir = sampler.get2D();

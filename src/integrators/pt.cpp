@@ -46,6 +46,7 @@ Rgb PtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler&
         }
         if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;
 
+        sampler.startBounce(depth);
         SurfaceBsdf bsdf(params, si.ns, si.ng);
         SurfaceBsdfSample bs;
         float uLobe = sampler.get1D();

@@ -140,6 +140,7 @@ Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampl
         if (si.lightIndex != kInvalidId) addEmission(ctx, si, wo, beta, deltaBounce, prevPdfW, prevP, L);
         if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;
 
+        sampler.startBounce(depth);
         SurfaceBsdf bsdf(params, si.ns, si.ng);
         if (!bsdf.isDelta()) addLightSample(ctx, si, params, bsdf, wo, beta, sampler, L);
 

@@ -11,7 +11,7 @@
 /// reverses when they leave. Short paths carry most of the image and are never cut: pt and ptnee
 /// play from depth kRouletteMinDepth, sub-paths (lt, bdpt) from their third vertex on.
 #include "core/math.h"
-#include "core/rng.h"
+#include "core/sampler.h"
 #include "integrators/sample_trace.h"
 
 namespace tessera {

@@ -81,16 +81,16 @@ private:
 }  // namespace
 
 SampleReplay replaySample(const RenderContext& ctx, const Integrator& integrator, SampleId id, uint64_t seed,
-                          std::ostream& trace) {
+                          SamplerKind samplerKind, std::ostream& trace) {
     // The render's worker threads run with flush-to-zero (renderer.cpp); so must the replay.
     ScopedFlushToZero ftz;
     SampleTrace record;
     TracingAccel accel(ctx.accel, ctx.scene, trace, record);
     RenderContext traced{ctx.scene, accel, ctx.camera, ctx.maxDepth, &record};
     trace << "tessera: debug: replaying pixel (" << id.x << "," << id.y << ") sample " << id.sample << " seed " << seed
-          << " with " << integrator.name() << "\n";
-    // Exactly the renderer's sequence: Sampler(pixel, sample, seed), jitter from its first 2D draw.
-    Sampler sampler(Vec2i(id.x, id.y), id.sample, seed);
+          << " with " << integrator.name() << " (sampler " << samplerName(samplerKind) << ")\n";
+    // Exactly the renderer's sequence: Sampler(pixel, sample, seed, kind), jitter from its first 2D draw.
+    Sampler sampler(Vec2i(id.x, id.y), id.sample, seed, samplerKind);
     Vec2f raster = Vec2f(float(id.x), float(id.y)) + sampler.get2D();
     trace << "  raster (" << std::setprecision(9) << raster.x << ", " << raster.y << ")\n";
     SplatSink sink;

@@ -21,8 +21,8 @@ struct SampleReplay {
     bool finite = true;                       ///< radiance and every splat finite
 };
 
-/// Replays sample `id` of a render with `seed`, writing the trace to `trace`.
+/// Replays sample `id` of a render with `seed` and `samplerKind`, writing the trace to `trace`.
 SampleReplay replaySample(const RenderContext& ctx, const Integrator& integrator, SampleId id, uint64_t seed,
-                          std::ostream& trace);
+                          SamplerKind samplerKind, std::ostream& trace);
 
 }  // namespace tessera

@@ -98,7 +98,7 @@ void TileScheduler::renderTile(size_t t, uint32_t s0, uint32_t n) {
     for (int y = tile.y0; y < tile.y1; ++y)
         for (int x = tile.x0; x < tile.x1; ++x)
             for (uint32_t s = s0; s < s0 + n; ++s) {
-                Sampler sampler(Vec2i(x, y), s, opt_.seed);
+                Sampler sampler(Vec2i(x, y), s, opt_.seed, opt_.sampler);
                 Vec2f raster = Vec2f(float(x), float(y)) + sampler.get2D();
                 size_t splatsBefore = sink.entries().size();
                 Rgb L = integrator_.sample(ctx_, Vec2i(x, y), raster, sampler, sink);

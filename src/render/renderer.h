@@ -49,6 +49,7 @@ struct RenderOptions {
     double timeLimitSeconds = 0.0;  ///< > 0: render passes until this budget is spent
     int threads = 0;                ///< 0 = all cores the process may use (hardwareThreads())
     uint64_t seed = 0;
+    SamplerKind sampler = kDefaultSampler;
     int tileSize = 32;
     const std::atomic<bool>* cancel = nullptr;  ///< checked before every tile
     ProgressReporter* progress = nullptr;

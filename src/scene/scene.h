@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/sampler_kind.h"
 #include "geometry/hit.h"
 #include "geometry/shapes.h"
 #include "materials/material.h"
@@ -21,6 +22,7 @@ struct RenderSettings {
     int spp = 16;
     int maxDepth = -1;  ///< maximum number of bounces; −1 = unlimited (Russian roulette ends paths)
     uint64_t seed = 0;
+    SamplerKind sampler = kDefaultSampler;  ///< --sampler (core/sampler.h)
     std::string integrator = "ptnee";
 };
 

@@ -163,7 +163,7 @@ void PreviewSession::run() {
             Film small(w, h);
             Camera camera(desc, w, h);
             RenderContext ctx{scene_, accel_, camera, settings_.maxDepth};
-            RenderOptions ro{.spp = 1, .threads = settings_.threads, .seed = settings_.seed};
+            RenderOptions ro{.spp = 1, .threads = settings_.threads, .seed = settings_.seed, .sampler = settings_.sampler};
             auto t0 = Clock::now();
             RenderStats st = renderImage(ctx, *integrator, small, ro);
             double seconds = secondsSince(t0);
@@ -202,7 +202,7 @@ void PreviewSession::run() {
         // the ones `render --spp N` takes at that index.
         Camera camera(desc, W, H);
         RenderContext ctx{scene_, accel_, camera, settings_.maxDepth};
-        RenderOptions ro{.spp = int(state.sppDone + 1), .threads = settings_.threads, .seed = settings_.seed};
+        RenderOptions ro{.spp = int(state.sppDone + 1), .threads = settings_.threads, .seed = settings_.seed, .sampler = settings_.sampler};
         ro.cancel = &cancel_;
         ro.resume = &state;
         RenderStats st = renderImage(ctx, *integrator, *film, ro);

@@ -34,6 +34,7 @@ struct PreviewSettings {
     int width = 0, height = 0;  ///< full resolution
     int threads = 0;            ///< as render's --threads (0: all cores)
     uint64_t seed = 0;
+    SamplerKind sampler = kDefaultSampler;
     int maxDepth = -1;
     uint32_t sppLimit = 0;      ///< stop refining at this many spp (0: never)
     double movingFrameSeconds = 1.0 / 30.0;  ///< target time of a reduced-resolution frame
