@@ -13,6 +13,7 @@
 #include "scene/gltf_asset.h"
 #include "scene/gltf_extensions.h"
 #include "scene/gltf_files.h"
+#include "scene/gltf_lights.h"
 #include "scene/gltf_textures.h"
 #include "scene/mesh_loader.h"
 #include "scene/tangents.h"
@@ -84,7 +85,7 @@ public:
         scene_.sourcePath = path_;
         if (nesting_ == 0) {
             readRenderSettings();
-            readEnvironment();  // an imported asset's own environment is not the scene's
+            readGltfEnvironment(model_, values_, options_, *assetBytes_, scene_);  // an imported asset's own environment is not the scene's
         }
         readMaterials();
         traverseScene();
@@ -171,29 +172,13 @@ private:
         ignored(!model_.animations.empty(), "animations are ignored: nodes are rendered in their static transforms");
     }
 
-    /// An optional RGB array member with components in [0, maxComponent].
     Rgb color3(const gl::Value& obj, const char* key, const std::string& element, Rgb fallback, double maxComponent) const {
-        if (!obj.IsObject() || !obj.Has(key)) return fallback;
-        const gl::Value& a = obj.Get(key);
-        if (!a.IsArray() || a.ArrayLen() != 3) fail(element, std::string(key) + " must be an array of 3 numbers");
-        Rgb c;
-        for (int i = 0; i < 3; ++i) {
-            const gl::Value& x = a.Get(i);
-            double d = x.IsNumber() ? x.GetNumberAsDouble() : -1.0;
-            if (!(d >= 0.0 && d <= maxComponent)) fail(element, std::string(key) + " components must be in [0, " + (maxComponent > 1e29 ? "inf" : "1") + ")");
-            c[i] = float(d);
-        }
-        return c;
+        return values_.color3(obj, key, element, fallback, maxComponent);
+    }
+    double number(const gl::Value& obj, const char* key, const std::string& element, double fallback) const {
+        return values_.number(obj, key, element, fallback);
     }
 
-    double number(const gl::Value& obj, const char* key, const std::string& element, double fallback) const {
-        if (!obj.Has(key)) return fallback;
-        const gl::Value& v = obj.Get(key);
-        if (!v.IsNumber()) fail(element, std::string("'") + key + "' must be a number");
-        double d = v.GetNumberAsDouble();
-        if (!std::isfinite(d)) fail(element, std::string("'") + key + "' must be finite");
-        return d;
-    }
 
     void readRenderSettings() {
         auto it = model_.extensions.find("TESSERA_render");
@@ -367,7 +352,7 @@ private:
         if (node.mesh >= 0) readMesh(node.mesh, world, el);
         if (node.camera >= 0) readCamera(node.camera, world, el);
         if (auto it = node.extensions.find("KHR_lights_punctual"); it != node.extensions.end())
-            readPunctualLight(it->second, world, el + ".extensions.KHR_lights_punctual");
+            readGltfPunctualLight(model_, values_, it->second, world, el + ".extensions.KHR_lights_punctual", scene_, warnings_);
         if (auto it = node.extensions.find("TESSERA_sphere"); it != node.extensions.end())
             readSphere(it->second, world, el + ".extensions.TESSERA_sphere");
         if (auto it = node.extensions.find("TESSERA_asset_mesh"); it != node.extensions.end())
@@ -407,105 +392,6 @@ private:
         scene_.camera = d;
     }
 
-    /// KHR_lights_punctual point, spot and directional lights. glTF gives point and spot intensities
-    /// in candela (lm/sr), directional ones in lux (lm/m²), and emission in nits (cd/m²); Tessera
-    /// reads emissive values as radiance 1:1, so for the same scale it reads candela as radiant
-    /// intensity (W/sr) and lux as irradiance (W/m²) 1:1: I = intensity · color, E = intensity ·
-    /// color. Spot and directional lights shine along the node's local −Z. `range` is ignored
-    /// (physically based inverse-square falloff, as the extension recommends).
-    void readPunctualLight(const gl::Value& v, const Mat4d& world, const std::string& el) {
-        if (!v.IsObject() || !v.Has("light") || !v.Get("light").IsNumber()) fail(el, "needs a 'light' index");
-        double index = v.Get("light").GetNumberAsDouble();
-        if (!(index >= 0 && index < double(model_.lights.size())) || index != std::floor(index))
-            fail(el, "'light' must index extensions.KHR_lights_punctual.lights[]");
-        const gl::Light& gl = model_.lights[size_t(index)];
-        const std::string lel = idx("KHR_lights_punctual.lights", size_t(index));
-        if (gl.type != "point" && gl.type != "spot" && gl.type != "directional") {
-            warnings_.push_back(path_ + ": " + lel + ": light type '" + gl.type + "' is not supported and is ignored");
-            return;
-        }
-        if (!(gl.intensity >= 0.0) || !std::isfinite(gl.intensity)) fail(lel, "intensity must be finite and non-negative");
-        Rgb color(1.f);
-        if (!gl.color.empty()) {
-            if (gl.color.size() != 3) fail(lel, "color must have 3 components");
-            for (int c = 0; c < 3; ++c) {
-                if (!(gl.color[size_t(c)] >= 0.0 && gl.color[size_t(c)] <= 1.0)) fail(lel, "color components must be in [0, 1]");
-                color[c] = float(gl.color[size_t(c)]);
-            }
-        }
-        Rgb value = color * float(gl.intensity);
-        if (isBlack(value)) return;
-        Vec3f position = Vec3f(Vec3d(world[3]));
-        if (!isFinite(position)) fail(el, "light position is not finite");
-        Vec3d axis = -Vec3d(world[2]);  // the node's −Z in world space
-        double axisLength = glm::length(axis);
-        if (gl.type != "point" && !(axisLength > 0.0 && std::isfinite(axisLength))) fail(el, "light direction is degenerate");
-        Vec3f direction = Vec3f(axis / axisLength);
-        if (gl.type == "point") {
-            scene_.pointLights.push_back(PointLightDesc{position, value});
-        } else if (gl.type == "spot") {
-            double inner = gl.spot.innerConeAngle, outer = gl.spot.outerConeAngle;
-            // The extension: 0 ≤ innerConeAngle < outerConeAngle ≤ π/2.
-            if (!(inner >= 0.0 && inner < outer && outer <= 0.5 * kPi + 1e-6))
-                fail(lel, "spot cone angles must satisfy 0 <= innerConeAngle < outerConeAngle <= pi/2");
-            scene_.spotLights.push_back(SpotLightDesc{position, direction, value, float(inner), float(std::min(outer, 0.5 * kPi))});
-        } else {
-            scene_.directionalLights.push_back(DirectionalLightDesc{direction, value});
-        }
-    }
-
-    /// TESSERA_environment at the glTF root: {"color": [r, g, b], "intensity": s, "rotation": degrees,
-    /// and optionally "image": "file.exr" (a relative URI, confined to the scene's folder like
-    /// buffers) or "asset": "name" (looked up in the asset folders like TESSERA_asset_mesh)}. The
-    /// radiance is color × intensity (× the image, linear, equirectangular: scene/environment.h).
-    void readEnvironment() {
-        auto it = model_.extensions.find("TESSERA_environment");
-        if (it == model_.extensions.end()) return;
-        const gl::Value& v = it->second;
-        const std::string el = "extensions.TESSERA_environment";
-        if (!v.IsObject()) fail(el, "must be an object");
-        EnvironmentDesc env;
-        env.color = color3(v, "color", el, Rgb(1.f), 1e30);
-        double intensity = number(v, "intensity", el, 1.0);
-        if (!(intensity >= 0.0 && intensity <= 1e30)) fail(el, "'intensity' must be a non-negative number");
-        env.intensity = float(intensity);
-        env.rotationDeg = float(number(v, "rotation", el, 0.0));
-        env.source = "constant";
-        if (v.Has("image") && v.Has("asset")) fail(el, "give either 'image' or 'asset', not both");
-        std::string file;
-        if (v.Has("image")) {
-            if (!v.Get("image").IsString()) fail(el, "'image' must be a string (a file relative to the scene)");
-            std::string uri = v.Get("image").Get<std::string>();
-            std::error_code ec;
-            std::filesystem::path folder = std::filesystem::weakly_canonical(std::filesystem::absolute(path_), ec).parent_path();
-            file = (folder / uri).string();
-            GltfFileAccess access;  // the confinement buffers and images have (scene/gltf_files.h)
-            access.root = folder;
-            access.options = options_;
-            if (!access.allowed(file)) fail(el, access.violation.empty() ? "cannot resolve '" + uri + "'" : access.violation);
-            if (!std::filesystem::is_regular_file(file, ec)) fail(el, "image '" + uri + "' not found");
-            uint64_t size = std::filesystem::file_size(file, ec);
-            if (ec || size > options_.maxFileBytes) fail(el, "'" + uri + "' is unreadable or over the file-size limit");
-        } else if (v.Has("asset")) {
-            if (!v.Get("asset").IsString()) fail(el, "'asset' must be a string");
-            std::string name = v.Get("asset").Get<std::string>();
-            // The one asset resolution (name rules, folders, the scene's running byte total).
-            file = resolveAssetOrThrow(name, options_.assetRoots, options_.maxFileBytes, *assetBytes_, path_, el);
-            env.source = "asset " + name;
-        }
-        if (!file.empty()) {
-            std::unique_ptr<Image> image;
-            try {
-                image = readEnvironmentImage(file);
-            } catch (const InputError& e) {
-                fail(el, e.what());
-            }
-            scene_.images.push_back(std::move(image));
-            env.image = scene_.images.back().get();
-            if (env.source == "constant") env.source = v.Get("image").Get<std::string>();  // as the scene names it
-        }
-        scene_.environment = env;
-    }
 
     void readSphere(const gl::Value& v, const Mat4d& world, const std::string& el) {
         if (!v.IsObject()) fail(el, "must be an object");
@@ -802,6 +688,7 @@ private:
     int nesting_ = 0;
     uint64_t ownAssetBytes_ = 0;
     uint64_t* assetBytes_;  ///< bytes of asset files read by the whole scene load (nested loaders share it)
+    GltfValues values_{path_};
     GltfFileAccess access_;
     gl::Model model_;
     std::vector<std::shared_ptr<const AlphaMask>> alphaMasks_;  ///< per material (null: opaque)
