@@ -6,10 +6,12 @@
 #include <fstream>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
+#include <map>
 #include <set>
 
 #include "core/error.h"
 #include "materials/bsdf.h"
+#include "geometry/instances.h"
 #include "scene/gltf_asset.h"
 #include "scene/gltf_extensions.h"
 #include "scene/gltf_files.h"
@@ -337,6 +339,7 @@ private:
             for (size_t i = 0; i < model_.nodes.size(); ++i)
                 if (!isChild[i]) roots.push_back(int(i));
         }
+        countReferences();
         for (int r : roots) visitNode(r, root_, 0);
     }
 
@@ -429,6 +432,12 @@ private:
                 fail(el, "'material' must index materials[]");
             materialId = uint32_t(mat);
         }
+        // Named by several nodes: read (and its bytes counted) once, then instanced; an emissive
+        // one stays flat per node, as lights are world-space triangles.
+        const bool instanced = options_.instanceMeshes && assetUses_[name] >= 2 && !scene_.materials[materialId].isEmissive();
+        const std::string key = name + "#" + std::to_string(materialId);
+        if (instanced)
+            if (auto it = assetPrototype_.find(key); it != assetPrototype_.end()) return placeInstance(it->second, world);
         const std::string file = resolveAssetOrThrow(name, options_.assetRoots, options_.maxFileBytes, *assetBytes_, path_, el);
         std::string lower = name;
         for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -443,8 +452,10 @@ private:
         mesh.name = name + " (" + el + ")";
         mesh.materialId = materialId;
         mesh.normals.clear();  // flat shading: the loaders' normals (if any) are not transformed here
-        bool flipWinding = glm::determinant(Mat4d(world)) < 0.0;
-        for (Vec3f& p : mesh.positions) p = Vec3f(world * glm::dvec4(Vec3d(p), 1.0));
+        const Mat4d placement = instanced ? Mat4d(1.0) : world;  // a prototype stays in object space
+        bool flipWinding = glm::determinant(Mat4d(placement)) < 0.0;
+        if (!instanced)
+            for (Vec3f& p : mesh.positions) p = Vec3f(world * glm::dvec4(Vec3d(p), 1.0));
         std::vector<glm::uvec3> kept;
         kept.reserve(mesh.triangles.size());
         for (glm::uvec3 t : mesh.triangles) {
@@ -454,6 +465,14 @@ private:
         }
         if (kept.empty()) fail(el, "asset '" + name + "' has no usable triangles");
         mesh.triangles = std::move(kept);
+        if (instanced) {
+            std::vector<TriangleMesh> objectSpace;
+            objectSpace.push_back(std::move(mesh));
+            uint32_t prototype = addPrototype(std::move(objectSpace));
+            assetPrototype_[key] = prototype;
+            placeInstance(prototype, world);
+            return;
+        }
         scene_.geometry.meshes.push_back(std::move(mesh));
     }
 
@@ -547,8 +566,61 @@ private:
         return out;
     }
 
+    /// How many nodes name each mesh and each TESSERA_asset_mesh asset: what is named twice or more
+    /// is instanced (when options_.instanceMeshes).
+    void countReferences() {
+        meshUses_.assign(model_.meshes.size(), 0);
+        for (const gl::Node& n : model_.nodes) {
+            if (n.mesh >= 0 && size_t(n.mesh) < meshUses_.size()) ++meshUses_[size_t(n.mesh)];
+            auto it = n.extensions.find("TESSERA_asset_mesh");
+            if (it != n.extensions.end() && it->second.IsObject() && it->second.Has("asset") && it->second.Get("asset").IsString())
+                ++assetUses_[it->second.Get("asset").Get<std::string>()];
+        }
+    }
+
+    /// A new prototype holding `meshes` (object space); kInvalidId when there are none.
+    uint32_t addPrototype(std::vector<TriangleMesh>&& meshes) {
+        if (meshes.empty()) return kInvalidId;
+        SceneGeometry proto;
+        proto.meshes = std::move(meshes);
+        scene_.geometry.prototypes.push_back(std::move(proto));
+        return uint32_t(scene_.geometry.prototypes.size() - 1);
+    }
+
+    /// An instance of `prototype` at `world`; a singular transform places nothing (its triangles
+    /// count as dropped degenerate ones, as a flattened copy's would be).
+    void placeInstance(uint32_t prototype, const Mat4d& world) {
+        if (prototype == kInvalidId) return;
+        MeshInstance inst;
+        if (makeMeshInstance(prototype, world, inst)) scene_.geometry.instances.push_back(inst);
+        else droppedTriangles_ += scene_.geometry.prototypes[prototype].primitiveCount();
+    }
+
+    /// Mesh `meshIndex` placed at `world`. Named by one node (or with instancing off): its primitives
+    /// in world space, as flat meshes. Named by several: its primitives are read once in object
+    /// space into a prototype that each node instances, except emissive ones, which stay flat per
+    /// node so that lights remain world-space triangles (scene/lights.h).
     void readMesh(int meshIndex, const Mat4d& world, const std::string& nodeEl) {
         if (size_t(meshIndex) >= model_.meshes.size()) fail(nodeEl, "mesh index out of range");
+        if (!options_.instanceMeshes || meshUses_[size_t(meshIndex)] < 2) {
+            readPrimitives(meshIndex, world, Primitives::kAll, scene_.geometry.meshes);
+            return;
+        }
+        auto [it, fresh] = meshPrototype_.try_emplace(meshIndex, kInvalidId);
+        if (fresh) {
+            std::vector<TriangleMesh> objectSpace;
+            readPrimitives(meshIndex, Mat4d(1.0), Primitives::kNonEmissive, objectSpace);
+            it->second = addPrototype(std::move(objectSpace));
+        }
+        placeInstance(it->second, world);
+        readPrimitives(meshIndex, world, Primitives::kEmissive, scene_.geometry.meshes);
+    }
+
+    enum class Primitives { kAll, kNonEmissive, kEmissive };
+
+    /// The triangle primitives of mesh `meshIndex` that `which` selects, transformed by `world`,
+    /// appended to `out`.
+    void readPrimitives(int meshIndex, const Mat4d& world, Primitives which, std::vector<TriangleMesh>& out) {
         const gl::Mesh& gm = model_.meshes[size_t(meshIndex)];
         // A mirroring transform reverses the winding (glTF 2.0 spec, 3.7.4): flip it back so front
         // faces, and so one-sided emitters, keep facing the way the artist meant (pbrt-v3 #229).
@@ -586,6 +658,8 @@ private:
                     fail(el, "index " + std::to_string(i) + " out of range (" + std::to_string(mesh.positions.size()) + " vertices)");
             if (prim.material >= 0 && size_t(prim.material) >= model_.materials.size()) fail(el, "material index out of range");
             mesh.materialId = prim.material >= 0 ? uint32_t(prim.material) : defaultMaterial_;
+            bool emissive = scene_.materials[mesh.materialId].isEmissive();
+            if ((which == Primitives::kNonEmissive && emissive) || (which == Primitives::kEmissive && !emissive)) continue;
             mesh.triangles = assembleTriangles(indices, mode, el);
             readTextureAttributes(prim, mesh, el);
             std::vector<glm::uvec3> tris = std::move(mesh.triangles);
@@ -615,7 +689,7 @@ private:
                 if (scene_.materials[mesh.materialId].isEmissive()) fail(el, "emitter has zero area");
                 fail(el, "all " + std::to_string(tris.size()) + " triangle(s) are degenerate or have non-finite vertices");
             }
-            scene_.geometry.meshes.push_back(std::move(mesh));
+            out.push_back(std::move(mesh));
         }
     }
 
@@ -695,6 +769,10 @@ private:
     Scene scene_;
     uint32_t defaultMaterial_ = 0;
     std::set<int> visited_;
+    std::vector<int> meshUses_;                    ///< nodes naming each mesh
+    std::map<std::string, int> assetUses_;         ///< nodes naming each TESSERA_asset_mesh asset
+    std::map<int, uint32_t> meshPrototype_;        ///< instanced mesh → its prototype (kInvalidId: none)
+    std::map<std::string, uint32_t> assetPrototype_;  ///< "asset#material" → its prototype
     size_t droppedTriangles_ = 0;
 
     /// False (and counted in the warning) for a triangle of zero area or with a non-finite vertex or
