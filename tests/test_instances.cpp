@@ -321,3 +321,29 @@ TEST(Instances, SurfaceInteractionsMatchTheFlattenedCopy) {
     std::cout << "instances " << onInstances << ", different hits " << differentHits << ", max |dp| " << maxDp << ", |dns| " << maxDns
               << ", |dbaseColor| " << maxDcolor << "\n";
 }
+
+TEST(Instances, RaySetsOfAnInstancedSceneStartOnItsSurfaces) {
+    // bench-accel and validate-accel generate diffuse and shadow rays from the hits of their
+    // oracle: on an instanced scene those hits lie on instances, whose points are in world space.
+    SceneGeometry g = randomInstancedScene(17);
+    SceneGeometry flat = InstanceFlattening(g).flatten();
+    std::unique_ptr<Accel> oracle = createAccel("bvh", g);
+    BruteForceAccel flatOracle(flat);
+    for (RayKind kind : {RayKind::Diffuse, RayKind::Shadow}) {
+        // A ray that leaves a surface at its origin, traced back from 0.01 along it, meets that
+        // surface (in the flattened copy) within 0.011; the rays that top up a set when the camera
+        // sees too little start anywhere. As many start on a surface as on the flattened copy.
+        auto onSurface = [&](const std::vector<Ray>& rays) {
+            size_t n = 0;
+            for (const Ray& r : rays) {
+                Vec3f d = glm::normalize(r.d);
+                n += flatOracle.occluded(Ray{r.o + 0.01f * d, -d, 0.f, 0.011f});
+            }
+            return n;
+        };
+        size_t instancedCount = onSurface(generateRays(g, *oracle, kind, 400, 9));
+        size_t flatCount = onSurface(generateRays(flat, flatOracle, kind, 400, 9));
+        EXPECT_GT(flatCount, 100u) << toString(kind);
+        EXPECT_GE(instancedCount + 8, flatCount) << toString(kind);
+    }
+}
