@@ -87,7 +87,7 @@ Runner addValidateAccelCommand(CLI::App& app) {
             j["input"] = opt->input;
             j["accel"] = opt->accel;
             j["reference"] = "embree";
-            j["primitives"] = geometry.primitiveCount();
+            j["primitives"] = geometry.primitiveCount() + geometry.instancedPrimitiveCount();
             j["alpha_masked_meshes"] = maskedMeshes;
             j["seed"] = opt->seed;
             j["kinds"] = perKind;
@@ -96,7 +96,7 @@ Runner addValidateAccelCommand(CLI::App& app) {
             j["seconds"] = seconds;
             std::cout << j.dump(2) << std::endl;
         } else {
-            std::cout << opt->accel << " vs embree on " << opt->input << " (" << geometry.primitiveCount()
+            std::cout << opt->accel << " vs embree on " << opt->input << " (" << geometry.primitiveCount() + geometry.instancedPrimitiveCount()
                       << " primitives, " << maskedMeshes << " alpha-masked meshes, seed " << opt->seed << ")\n";
             for (auto& [name, v] : perKind.items())
                 std::cout << "  " << name << ": " << v["rays"] << " rays, " << v["agreements"] << " agree, " << v["ties"]
