@@ -2,6 +2,7 @@
 // Procedural scenes that break acceleration structures (after Embree's verify.cpp): coplanar and
 // duplicated triangles, slivers, scene-spanning and tiny triangles, triangles in candidate split
 // planes, spheres mixed with triangles. The battery both our BVH and our k-d tree are tested on.
+#include <algorithm>
 #include <string>
 
 #include "core/rng.h"
@@ -95,6 +96,61 @@ inline SceneGeometry axisAlignedTriangles() {
             d[u] = 0.5f, d[v] = 0.9f;
             addTriangle(m, a, b, d);
         }
+    return withMesh(m);
+}
+
+/// An integer lattice of axis-aligned triangles: on each of the 17 planes x, y, z = 0, 1, …, 16, random
+/// right triangles with integer vertices (legs 1–4) that overlap one another; every vertex lies on a
+/// plane a binned or sweeping builder considers, and most rays hit two or more coplanar triangles at
+/// once. 3 × 17 × `perPlane` triangles (30,600 by default).
+inline SceneGeometry integerLattice(int perPlane = 600) {
+    TriangleMesh m;
+    Pcg32 rng(11, 0);
+    auto below = [&](uint32_t n) { return int(rng.nextU32() % n); };
+    for (int axis = 0; axis < 3; ++axis)
+        for (int k = 0; k <= 16; ++k)
+            for (int i = 0; i < perPlane; ++i) {
+                int u = (axis + 1) % 3, v = (axis + 2) % 3;
+                int a0 = below(16), b0 = below(16);
+                int a1 = std::min(16, a0 + 1 + below(4)), b1 = std::min(16, b0 + 1 + below(4));
+                Vec3f corner[4];
+                for (int c = 0; c < 4; ++c) {
+                    corner[c][axis] = float(k);
+                    corner[c][u] = float(c & 1 ? a1 : a0);
+                    corner[c][v] = float(c & 2 ? b1 : b0);
+                }
+                int skip = below(4);  // which corner of the rectangle the right triangle leaves out
+                Vec3f tri[3];
+                for (int c = 0, n = 0; c < 4; ++c)
+                    if (c != skip) tri[n++] = corner[c];
+                if (below(2)) std::swap(tri[1], tri[2]);  // both windings
+                addTriangle(m, tri[0], tri[1], tri[2]);
+            }
+    m.name = "integer lattice";
+    return withMesh(m);
+}
+
+/// A hairball: `count` long slivers crossing the cube [-1, 1]³, each from a random point of one face
+/// to a random point of another, 1e-4 to 1e-3 wide at its middle: every ray passes many of them,
+/// within a few ulps of their edges, where their planes are ill-conditioned.
+inline SceneGeometry sliverHairball(int count = 60000) {
+    TriangleMesh m;
+    Pcg32 rng(13, 0);
+    auto onFace = [&](int face) {
+        Vec3f p(2.f * rng.nextFloat() - 1.f, 2.f * rng.nextFloat() - 1.f, 2.f * rng.nextFloat() - 1.f);
+        p[face % 3] = face < 3 ? -1.f : 1.f;
+        return p;
+    };
+    for (int i = 0; i < count; ++i) {
+        int fa = int(rng.nextU32() % 6), fb = (fa + 1 + int(rng.nextU32() % 5)) % 6;
+        Vec3f a = onFace(fa), b = onFace(fb);
+        Vec3f side = glm::cross(b - a, Vec3f(rng.nextFloat() - 0.5f, rng.nextFloat() - 0.5f, rng.nextFloat() - 0.5f));
+        float width = 1e-4f + 9e-4f * rng.nextFloat();
+        float len = glm::length(side);
+        Vec3f c = 0.5f * (a + b) + (len > 0.f ? width / len : 0.f) * side;
+        addTriangle(m, a, b, c);
+    }
+    m.name = "sliver hairball";
     return withMesh(m);
 }
 

@@ -59,6 +59,16 @@ TEST(Bvh, MatchesEmbreeOnDuplicatedTriangles) { expectMatchesEmbree(duplicatedTr
 
 TEST(Bvh, MatchesEmbreeOnLongSlivers) { expectMatchesEmbree(longSlivers(), 3000, "long slivers"); }
 
+// The two meshes whose verdicts depend on the validator's tie rule: 30,600 overlapping coplanar
+// triangles on integer planes (most rays hit two or more at one distance), and 60,000 slivers
+// crossing a cube (each ray's origin on an ill-conditioned plane). Every ray crosses thousands of
+// the slivers' boxes, so the hairball gets few rays.
+TEST(Bvh, MatchesEmbreeOnAnIntegerLatticeOfCoplanarTriangles) {
+    expectMatchesEmbree(integerLattice(), 1500, "integer lattice");
+}
+
+TEST(Bvh, MatchesEmbreeOnASliverHairball) { expectMatchesEmbree(sliverHairball(), 100, "sliver hairball"); }
+
 TEST(Bvh, MatchesEmbreeWithSceneSpanningTriangles) {
     expectMatchesEmbree(sceneSpanningTriangles(), 3000, "scene-spanning triangles");
 }
@@ -143,6 +153,11 @@ TEST(Bvh, SpatialSplitsMatchEmbreeOnEveryPathology) {
     std::vector<std::string> warnings;
     Scene scene = loadGltfScene(test::sourcePath("scenes/sphere-cornell/sphere-cornell.gltf"), warnings);
     expectMatchesEmbree(scene.geometry, 2000, "sbvh: sphere Cornell box", sbvh);
+}
+
+TEST(Bvh, SpatialSplitsMatchEmbreeOnTheLatticeAndTheHairball) {
+    expectMatchesEmbree(integerLattice(), 1000, "sbvh: integer lattice", spatialSplits());
+    expectMatchesEmbree(sliverHairball(), 60, "sbvh: sliver hairball", spatialSplits());
 }
 
 TEST(Bvh, SpatialSplitsCutLongSliversAndAreReproducible) {

@@ -57,6 +57,13 @@ TEST(KdTree, MatchesEmbreeOnDuplicatedTriangles) { expectMatchesEmbree(duplicate
 
 TEST(KdTree, MatchesEmbreeOnLongSlivers) { expectMatchesEmbree(longSlivers(), 3000, "long slivers"); }
 
+TEST(KdTree, MatchesEmbreeOnAnIntegerLatticeOfCoplanarTriangles) {
+    // Every vertex on a candidate plane, 17 planes per axis each holding 600 overlapping triangles.
+    expectMatchesEmbree(integerLattice(), 2000, "integer lattice");
+}
+
+TEST(KdTree, MatchesEmbreeOnASliverHairball) { expectMatchesEmbree(sliverHairball(), 150, "sliver hairball"); }
+
 TEST(KdTree, MatchesEmbreeWithSceneSpanningTriangles) {
     expectMatchesEmbree(sceneSpanningTriangles(), 3000, "scene-spanning triangles");
 }

@@ -35,6 +35,9 @@ tessera_packages_study=(python3 python3-numpy python3-openimageio python3-matplo
 tessera_packages_fuzz=(clang libclang-rt-14-dev python3)
 # fresh: tools/fresh_check.sh builds a throwaway Debian 12 root file system.
 tessera_packages_fresh=(mmdebstrap zstd)
+# slurm: tools/local_slurm.sh runs a one-node Slurm (slurmctld, slurmd, sbatch) with MUNGE
+# authentication for the farm test (tests/test_farm_slurm.sh, `tessera farm`).
+tessera_packages_slurm=(slurm-wlm munge)
 
 # A package counts as present when dpkg has it installed; a few count as present when the command
 # they provide is on PATH from elsewhere (a machine with Node.js's own packages has npm without
@@ -51,8 +54,8 @@ tessera_group_packages() {  # group... -> the packages, one a line
   local g
   for g in "$@"; do
     case "$g" in
-      build|assets|study|fuzz|fresh) eval 'printf "%s\n" "${tessera_packages_'"$g"'[@]}"' ;;
-      *) echo "tools/bootstrap.sh: unknown package group '$g' (build, assets, study, fuzz, fresh)" >&2; return 2 ;;
+      build|assets|study|fuzz|fresh|slurm) eval 'printf "%s\n" "${tessera_packages_'"$g"'[@]}"' ;;
+      *) echo "tools/bootstrap.sh: unknown package group '$g' (build, assets, study, fuzz, fresh, slurm)" >&2; return 2 ;;
     esac
   done
 }

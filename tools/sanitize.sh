@@ -35,6 +35,6 @@ if [ "$what" = tsan ] || [ "$what" = all ]; then
   # history_size=7: the longest per-thread access history, so that the earlier access of a report
   # keeps its stack (a suppression can only match frames TSan restored; tools/tsan.supp).
   TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:history_size=7:suppressions=$root/tools/tsan.supp" \
-    run tsan thread -E '^(Accel|AccelRender|Bvh|KdTree|MalformedCorpus|MalformedMeshCorpus|Math|SamplingChi2|SceneErrors|Camera|ImageIo)\.|^AlphaMask\.Validat|^library_consumer$' || status=1
+    run tsan thread -E '^(Accel|AccelRender|Bvh|KdTree|MalformedCorpus|MalformedMeshCorpus|Math|SamplingChi2|SceneErrors|Camera|ImageIo|ValidationVerdicts)\.|^AlphaMask\.Validat|^library_consumer$' || status=1
 fi
 exit $status

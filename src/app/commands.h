@@ -14,6 +14,9 @@ Runner addCompareCommand(CLI::App& app);
 Runner addValidateAccelCommand(CLI::App& app);
 Runner addBenchAccelCommand(CLI::App& app);
 Runner addViewCommand(CLI::App& app);
+Runner addMergeCommand(CLI::App& app);
+Runner addFarmCommand(CLI::App& app);
+Runner addBatchCommand(CLI::App& app);
 
 /// Prints "tessera: error: MESSAGE" on one line to stderr.
 void printError(const std::string& message);

@@ -1,119 +1,29 @@
 /// \file render_command.cpp
 /// `tessera render SCENE`: load, build the acceleration structure, render, write EXR + PNG.
-#include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <optional>
-#include <sstream>
 
 #include "accel/accel.h"
 #include "app/commands.h"
+#include "app/render_job.h"
 #include "app/scene_options.h"
 #include "core/error.h"
-#include "core/fnv1a.h"
-#include "core/version.h"
-#include "integrators/bdpt.h"
 #include "integrators/integrator.h"
-#include "io/display_transform.h"
-#include "io/image_output.h"
-#include "render/checkpoint.h"
 #include "render/debug_pixel.h"
 #include "render/interrupt.h"
 #include "render/renderer.h"
-#include "scene/gltf_loader.h"
 
 namespace tessera::app {
 namespace {
 
-struct RenderArgs : SceneOptions {
-    std::string output, png, accel, display = "sRGB", view = "Standard";
-    std::string bdptStrategies;  ///< directory for the per-strategy debug images (empty: none)
+/// `tessera render`'s command line: one render job, plus the options that are not a render.
+struct RenderArgs : RenderJob {
     std::string debugPixel;  ///< "x,y,s": replay one sample with a trace instead of rendering
-    int threads = 0;
-    double timeLimit = 0.0;
-    bool quiet = false, json = false, noPng = false;
-    double checkpointSeconds = -1.0;  ///< < 0: no checkpoints
-    bool resume = false;
-    uint64_t stopAfterTiles = 0;      ///< test hook (hidden option)
+    bool json = false;
 };
-
-
-
-/// `--bdpt-strategies DIR` (pbrt's visualizestrategies): one EXR per strategy (s, t), weighted and
-/// unweighted, for paths of at most maxDepth + 2 vertices (5 when the depth is unlimited). Each image
-/// is a full re-render with the same seed that keeps one strategy, so the weighted images of all
-/// strategies sum to the bdpt image rendered with the same --max-depth.
-void writeBdptStrategyImages(const RenderArgs& a, const RenderSettings& s, const RenderContext& ctx, RenderOptions ro,
-                             const io::Metadata& md) {
-    int maxVertices = s.maxDepth >= 0 ? s.maxDepth + 2 : 5;
-    RenderContext limited = ctx;
-    limited.maxDepth = maxVertices - 2;
-    ro.progress = nullptr;
-    // Fresh renders of their own: no resumed state, no checkpoints, no test stop.
-    ro.resume = nullptr;
-    ro.onPassEnd = nullptr;
-    ro.stopAfterTiles = 0;
-    for (int n = 2; n <= maxVertices; ++n)
-        for (int t = 1; t <= n; ++t) {
-            int sLight = n - t;
-            for (bool weighted : {true, false}) {
-                BdptSettings bs;
-                bs.onlyS = sLight;
-                bs.onlyT = t;
-                bs.unweighted = !weighted;
-                BdptIntegrator integrator(bs);
-                Film film(s.width, s.height);
-                renderImage(limited, integrator, film, ro);
-                std::string path = a.bdptStrategies + "/bdpt_s" + std::to_string(sLight) + "_t" + std::to_string(t) +
-                                   (weighted ? "_weighted.exr" : "_unweighted.exr");
-                io::Metadata m = md;
-                m.push_back({"tessera:bdpt_strategy", "s=" + std::to_string(sLight) + " t=" + std::to_string(t)});
-                m.push_back({"tessera:bdpt_weighted", weighted ? "true" : "false"});
-                std::vector<float> rgba = film.rgba();
-                io::writeExr(path, s.width, s.height, rgba.data(), m);
-            }
-        }
-}
-
-/// Hexadecimal float: the exact bits, so a camera changed in the last digit is a different camera.
-std::string exact(float v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%a", double(v));
-    return buf;
-}
-
-/// Every setting that decides the pixels of a render (and so must match to resume it). The
-/// acceleration structure and the thread count are left out: they do not change the image.
-CheckpointHeader checkpointHeader(const RenderArgs& a, const RenderSettings& s, const CameraDesc& cam, const Integrator& integrator,
-                                  int tileSize) {
-    std::string camera;
-    for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) camera += exact(cam.cameraToWorld[c][r]) + ",";
-    camera += exact(cam.yfov) + "," + exact(cam.apertureRadius) + "," + exact(cam.focusDistance);
-    CheckpointHeader header = {
-        {"renderer", std::string("tessera ") + versionString() + " (" + gitRevision() + ")"},
-        {"scene_hash", fnv1a64OfFile(a.scene)},
-        {"integrator", std::string(integrator.name())},
-        {"seed", std::to_string(s.seed)},
-        {"resolution", std::to_string(s.width) + "x" + std::to_string(s.height)},
-        {"spp_target", a.timeLimit > 0 ? "time-bounded" : std::to_string(s.spp)},
-        {"max_depth", std::to_string(s.maxDepth)},
-        {"camera", camera},
-        {"tile_size", std::to_string(tileSize)},
-    };
-    // The command line's environment changes the pixels without changing the scene file.
-    if (!a.env.empty() || a.envRotate || a.envIntensity)
-        header.push_back({"environment", a.env + (a.env.empty() || !std::filesystem::exists(a.env) ? "" : " " + fnv1a64OfFile(a.env)) +
-                                             " rotate " + (a.envRotate ? std::to_string(*a.envRotate) : "-") + " intensity " +
-                                             (a.envIntensity ? std::to_string(*a.envIntensity) : "-")});
-    return header;
-}
 
 /// "x,y,s" → the sample to replay; checked against the image size.
 SampleId parseDebugPixel(const std::string& text, int width, int height) {
@@ -123,28 +33,6 @@ SampleId parseDebugPixel(const std::string& text, int width, int height) {
         throw InputError("--debug-pixel needs x,y,s: a pixel inside the " + std::to_string(width) + "x" + std::to_string(height) +
                          " image and a sample index >= 0, got '" + text + "'");
     return SampleId{int(v[0]), int(v[1]), uint32_t(v[2])};
-}
-
-std::string describe(const SampleId& id) {
-    return "pixel (" + std::to_string(id.x) + "," + std::to_string(id.y) + ") sample " + std::to_string(id.sample);
-}
-
-
-
-
-
-/// Where the images go; `display` is set when a PNG is written (checked before the render starts).
-struct OutputPaths {
-    std::string exr, png;  ///< png empty: no PNG
-    std::optional<io::DisplayTransform> display;
-};
-
-OutputPaths outputPaths(const RenderArgs& a) {
-    OutputPaths o;
-    o.exr = a.output.empty() ? "out/" + stem(a.scene) + ".exr" : a.output;
-    o.png = a.noPng ? "" : (a.png.empty() ? std::filesystem::path(o.exr).replace_extension(".png").string() : a.png);
-    if (!o.png.empty()) o.display.emplace(a.display, a.view);
-    return o;
 }
 
 /// `--debug-pixel x,y,s`: replays one sample with a trace on stderr and prints its radiance.
@@ -166,86 +54,13 @@ int runDebugPixel(const RenderArgs& a, const RenderContext& ctx, const Integrato
     return 0;
 }
 
-/// `--checkpoint SEC` and `--resume`: OUT.exr.ckpt beside the image, written every SEC seconds (at
-/// pass boundaries) and whenever the render stops early; --resume continues one and keeps it up to
-/// date. Must outlive the render it is attached to.
-class Checkpoints {
-public:
-    Checkpoints(const RenderArgs& a, const std::string& exrPath, CheckpointHeader header)
-        : path_(exrPath + ".ckpt"), enabled_(a.checkpointSeconds >= 0.0 || a.resume), everySeconds_(a.checkpointSeconds),
-          header_(std::move(header)) {}
-
-    /// With --resume, loads the checkpoint into `film` and `ro`; when enabled, has `ro` write them.
-    void attach(const RenderArgs& a, Film& film, RenderOptions& ro) {
-        if (a.resume) {
-            resumed_ = readCheckpoint(path_, header_, film);
-            ro.resume = &resumed_;
-            if (!a.quiet)
-                std::cerr << "tessera: resuming " << path_ << " at " << resumed_.sppDone << " spp"
-                          << (resumed_.tileDone.empty() ? "" : " (inside a pass)") << std::endl;
-        }
-        last_ = std::chrono::steady_clock::now();
-        if (enabled_) ro.onPassEnd = [this](const Film& f, const RenderState& state, bool interrupted) { write(f, state, interrupted); };
-    }
-    /// A finished render leaves nothing to resume: a stale checkpoint would only mislead.
-    void finish(const RenderStats& stats) const {
-        if (!enabled_ || stats.interrupted) return;
-        std::error_code ignored;
-        std::filesystem::remove(path_, ignored);
-    }
-    bool enabled() const { return enabled_; }
-    const std::string& path() const { return path_; }
-    /// Camera samples the resumed checkpoint had taken (0 without --resume).
-    uint64_t samplesResumed() const { return resumed_.samples; }
-
-private:
-    void write(const Film& f, const RenderState& state, bool interrupted) {
-        double since = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_).count();
-        if (!interrupted && since < everySeconds_) return;
-        try {
-            writeCheckpoint(path_, header_, f, state);
-        } catch (const InputError& e) {
-            // Losing a checkpoint must not lose the render itself.
-            printWarning(e.what());
-        }
-        last_ = std::chrono::steady_clock::now();
-    }
-
-    std::string path_;
-    bool enabled_;
-    double everySeconds_;
-    CheckpointHeader header_;
-    RenderState resumed_;
-    std::chrono::steady_clock::time_point last_;
-};
-
-
-double samplesPerSecond(const RenderStats& stats) { return stats.seconds > 0 ? double(stats.samples) / stats.seconds : 0.0; }
-
-/// The closing progress line, and the warning that names the first non-finite sample.
-void printSummary(ProgressReporter& progress, const RenderStats& stats, const OutputPaths& out) {
-    std::ostringstream summary;
-    summary << stats.sppCompleted << " spp in " << formatDuration(stats.seconds) << " (" << samplesPerSecond(stats) / 1e6
-            << " M samples/s, " << stats.threads << " threads)" << (stats.interrupted ? ", INTERRUPTED" : "") << " -> "
-            << out.exr << (out.png.empty() ? "" : ", " + out.png);
-    progress.done(summary.str());
-    if (stats.nonFiniteDropped > 0) {
-        std::string where;
-        if (stats.firstNonFinite) {
-            const SampleId& f = *stats.firstNonFinite;
-            where = "; first non-finite sample at " + describe(f) + " - replay with --debug-pixel " + std::to_string(f.x) + "," +
-                    std::to_string(f.y) + "," + std::to_string(f.sample);
-        }
-        printWarning(std::to_string(stats.nonFiniteDropped) + " non-finite sample(s) were dropped" + where);
-    }
-}
-
 /// `--json`: the run's figures as one JSON object on stdout.
-void printJson(const RenderArgs& a, const RenderSettings& s, const Integrator& integrator, const Accel& accel,
-               const RenderStats& stats, const OutputPaths& out, const Checkpoints& checkpoints) {
+void printJson(const RenderArgs& a, const RenderSettings& s, const Accel& accel, const RenderJobResult& r, const JobPlan& plan) {
+    const RenderStats& stats = r.stats;
+    const OutputPaths& out = plan.out;
     nlohmann::json j = {
         {"scene", a.scene},
-        {"integrator", std::string(integrator.name())},
+        {"integrator", std::string(plan.integrator->name())},
         {"accel", std::string(accel.name())},
         {"spp", stats.sppCompleted},
         {"samples", stats.samples},
@@ -254,7 +69,9 @@ void printJson(const RenderArgs& a, const RenderSettings& s, const Integrator& i
         {"resolution", {s.width, s.height}},
         {"threads", stats.threads},
         {"seed", s.seed},
-        {"outputs", out.png.empty() ? nlohmann::json{{"exr", out.exr}} : nlohmann::json{{"exr", out.exr}, {"png", out.png}}},
+        {"outputs", !a.samples.empty() ? nlohmann::json{{"partial", out.exr}}
+                    : out.png.empty()  ? nlohmann::json{{"exr", out.exr}}
+                                       : nlohmann::json{{"exr", out.exr}, {"png", out.png}}},
         {"samples_per_second", samplesPerSecond(stats)},
         {"nonfinite_dropped", stats.nonFiniteDropped},
         {"interrupted", stats.interrupted},
@@ -262,7 +79,7 @@ void printJson(const RenderArgs& a, const RenderSettings& s, const Integrator& i
     };
     if (stats.firstNonFinite)
         j["first_nonfinite"] = {{"x", stats.firstNonFinite->x}, {"y", stats.firstNonFinite->y}, {"sample", stats.firstNonFinite->sample}};
-    if (checkpoints.enabled() && stats.interrupted) j["checkpoint"] = checkpoints.path();
+    if (!r.checkpoint.empty()) j["checkpoint"] = r.checkpoint;
     std::cout << j.dump() << std::endl;
 }
 
@@ -270,50 +87,20 @@ int runRender(const RenderArgs& a) {
     Scene scene = loadScene(a);
 
     RenderSettings s = resolveSettings(a, scene);
-    checkFilmFits(a, s);
-    // Checked before spending time on the render: the paths and the display transform.
-    OutputPaths out = outputPaths(a);
-    std::unique_ptr<Integrator> integrator = createIntegrator(s.integrator);
+    // Checked before spending time on the render: film memory, the paths, the display transform, the integrator.
+    JobPlan plan = planRenderJob(a, s, *scene.camera);
     AccelOptions accelOptions;
     accelOptions.threads = a.threads;
-    std::unique_ptr<Accel> accel = createAccel(a.accel.empty() ? "embree" : a.accel, scene.geometry, accelOptions);
-    Camera camera(*scene.camera, s.width, s.height);
-    RenderContext ctx{scene, *accel, camera, s.maxDepth};
-    if (!a.debugPixel.empty()) return runDebugPixel(a, ctx, *integrator, s);
+    std::unique_ptr<Accel> accel = createAccel(accelName(a), scene.geometry, accelOptions);
+    if (!a.debugPixel.empty()) {
+        Camera camera(plan.camera, s.width, s.height);
+        return runDebugPixel(a, RenderContext{scene, *accel, camera, s.maxDepth}, *plan.integrator, s);
+    }
 
-    Film film(s.width, s.height);
-    RenderOptions ro{.spp = s.spp, .timeLimitSeconds = a.timeLimit, .threads = a.threads, .seed = s.seed};
-    ro.stopAfterTiles = a.stopAfterTiles;
-    Checkpoints checkpoints(a, out.exr, checkpointHeader(a, s, *scene.camera, *integrator, ro.tileSize));
-    checkpoints.attach(a, film, ro);
-
-    InterruptGuard guard;
     interruptFlag().store(false);
-    ro.cancel = &interruptFlag();
-    uint64_t total = a.timeLimit > 0 ? 0 : uint64_t(s.width) * uint64_t(s.height) * uint64_t(s.spp);
-    total -= std::min(total, checkpoints.samplesResumed());
-    ProgressReporter progress("render " + stem(a.scene), total, a.timeLimit, a.quiet);
-    ro.progress = &progress;
-    RenderStats stats = renderImage(ctx, *integrator, film, ro);
-
-    io::Metadata md = imageMetadata(a.scene, s,
-                                    ImageFacts{.integrator = std::string(integrator->name()), .accel = std::string(accel->name()),
-                                               .spp = stats.sppCompleted, .samples = stats.samples,
-                                               .nonFiniteDropped = stats.nonFiniteDropped, .seconds = stats.seconds,
-                                               .threads = stats.threads, .interrupted = stats.interrupted, .resumed = a.resume});
-    if (stats.firstNonFinite) md.push_back({"tessera:first_nonfinite", describe(*stats.firstNonFinite)});
-    if (scene.environment)
-        md.push_back({"tessera:environment", scene.environment->source + " rotation " + std::to_string(scene.environment->rotationDeg) +
-                                                 " intensity " + std::to_string(scene.environment->intensity)});
-    std::vector<float> rgba = film.rgba();
-    io::writeExr(out.exr, s.width, s.height, rgba.data(), md);
-    if (out.display) io::writePng(out.png, s.width, s.height, rgba.data(), *out.display, md);
-    checkpoints.finish(stats);
-    if (!a.bdptStrategies.empty() && !stats.interrupted) writeBdptStrategyImages(a, s, ctx, ro, md);
-
-    printSummary(progress, stats, out);
-    if (a.json) printJson(a, s, *integrator, *accel, stats, out, checkpoints);
-    return stats.interrupted ? 130 : 0;
+    RenderJobResult r = runRenderJob(a, plan, scene, *accel, "render " + stem(a.scene));
+    if (a.json) printJson(a, s, *accel, r, plan);
+    return r.stats.interrupted ? 130 : 0;
 }
 
 std::string joined(const std::vector<std::string>& v) {
@@ -369,6 +156,9 @@ Runner addRenderCommand(CLI::App& app) {
     cmd->add_option("--debug-pixel", a->debugPixel,
                     "replay one camera sample x,y,s exactly as the render takes it, tracing its rays, hits, splats and the "
                     "first non-finite value on stderr; prints the radiance (or JSON with --json) and writes no image");
+    cmd->add_option("--samples", a->samples,
+                    "render only sample indices A:B (A inclusive, B exclusive, B <= --spp) of every pixel into a partial "
+                    "(-o, default out/<scene>_A-B.partial); 'tessera merge' joins partials into the image");
     cmd->add_option("--stop-after-tiles", a->stopAfterTiles, "test hook: behave as if interrupted after this many tiles")
         ->group("");
     cmd->add_flag("--quiet", a->quiet, "no progress output");

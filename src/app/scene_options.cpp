@@ -58,6 +58,8 @@ void parseResolution(const std::string& text, int& width, int& height) {
     height = h;
 }
 
+}  // namespace
+
 /// `--env FILE|R,G,B [--env-rotate DEG] [--env-intensity S]`: replaces (or adjusts) the scene's
 /// environment light and rebuilds its light set. Rotation and intensity given alone adjust the
 /// scene's own environment.
@@ -86,8 +88,6 @@ void applyEnvironmentOptions(const SceneOptions& a, Scene& scene) {
     scene.finalize();
 }
 
-}  // namespace
-
 Scene loadScene(const SceneOptions& a) {
     std::vector<std::string> warnings;
     SceneLoadOptions loadOptions;
@@ -98,26 +98,36 @@ Scene loadScene(const SceneOptions& a) {
     return scene;
 }
 
-RenderSettings resolveSettings(const SceneOptions& a, Scene& scene) {
+RenderSettings resolveRenderSettings(const SceneOptions& a, const Scene& scene) {
     RenderSettings s = scene.settings;
-    applyEnvironmentOptions(a, scene);
     if (!a.resolution.empty()) parseResolution(a.resolution, s.width, s.height);
     if (a.spp > 0) s.spp = a.spp;
     if (a.maxDepth) s.maxDepth = *a.maxDepth;
     if (a.seed >= 0) s.seed = uint64_t(a.seed);
     if (!a.integrator.empty()) s.integrator = a.integrator;
+    return s;
+}
 
+CameraDesc resolveCamera(const SceneOptions& a, const std::optional<CameraDesc>& base) {
+    std::optional<CameraDesc> camera = base;
     if (!a.lookAt.empty()) {
-        CameraDesc d = scene.camera.value_or(CameraDesc{});
+        CameraDesc d = camera.value_or(CameraDesc{});
         d.cameraToWorld = lookAtCamera(a.lookAt);
-        scene.camera = d;
+        camera = d;
     }
     if (a.fovDeg > 0.0) {
-        if (!scene.camera) throw InputError("--fov needs a camera: the scene has none, add --look-at");
-        scene.camera->yfov = float(a.fovDeg * kPi / 180.0);
+        if (!camera) throw InputError("--fov needs a camera: the scene has none, add --look-at");
+        camera->yfov = float(a.fovDeg * kPi / 180.0);
     }
-    if (!scene.camera)
+    if (!camera)
         throw SceneError(a.scene, "cameras", "the scene has no camera; give one with --look-at EX,EY,EZ,TX,TY,TZ [--fov DEG]");
+    return *camera;
+}
+
+RenderSettings resolveSettings(const SceneOptions& a, Scene& scene) {
+    applyEnvironmentOptions(a, scene);
+    RenderSettings s = resolveRenderSettings(a, scene);
+    scene.camera = resolveCamera(a, scene.camera);
     return s;
 }
 

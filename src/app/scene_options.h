@@ -36,6 +36,15 @@ Scene loadScene(const SceneOptions& o);
 /// The scene's render settings with the command line's overrides. The camera and environment
 /// options change `scene`; a scene without a camera needs --look-at.
 RenderSettings resolveSettings(const SceneOptions& o, Scene& scene);
+
+/// The parts of resolveSettings, for renders that share one loaded scene (`tessera batch`):
+/// the environment options (they change the scene's lights, so they belong to the loaded scene);
+void applyEnvironmentOptions(const SceneOptions& o, Scene& scene);
+/// the resolution, spp, depth, seed and integrator overrides of the scene's settings;
+RenderSettings resolveRenderSettings(const SceneOptions& o, const Scene& scene);
+/// `base` (the scene's camera, or one picked from Scene::cameras) with the --look-at and --fov
+/// overrides; SceneError naming `o.scene` when there is no camera at all.
+CameraDesc resolveCamera(const SceneOptions& o, const std::optional<CameraDesc>& base);
 /// Refuses a resolution whose film alone would exceed the memory limit, instead of dying in the
 /// allocator.
 void checkFilmFits(const SceneOptions& o, const RenderSettings& s);

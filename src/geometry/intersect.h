@@ -7,26 +7,32 @@
 
 namespace tessera {
 
-/// Ray–sphere intersection in double precision, using the discriminant form of Haines et al. 2019
-/// ("Precision Improvements for Ray/Sphere Intersection", Ray Tracing Gems ch. 7, eq. 7.10 and the
-/// stable quadratic of eq. 7.11): r² − |f − (f·d̂)d̂|² instead of b² − 4ac, which loses every digit
-/// when |f| ≫ r or r ≫ t (our walls are spheres of radius 1e4 seen from 1e2 away).
-/// Returns the nearest t in (ray.tMin, ray.tMax), or a negative value when there is none.
-inline double intersectSphere(const Vec3f& centerF, float radiusF, const Ray& ray) {
-    Vec3d o(ray.o), d(ray.d), c(centerF);
-    double r = radiusF;
+/// Both distances t0 ≤ t1 at which the line o + t·d meets the sphere |x − c| = r, in double
+/// precision, using the discriminant form of Haines et al. 2019 ("Precision Improvements for
+/// Ray/Sphere Intersection", Ray Tracing Gems ch. 7, eq. 7.10 and the stable quadratic of eq. 7.11):
+/// r² − |f − (f·d̂)d̂|² instead of b² − 4ac, which loses every digit when |f| ≫ r or r ≫ t (our walls
+/// are spheres of radius 1e4 seen from 1e2 away). False when the line misses the sphere.
+inline bool sphereRoots(const Vec3d& o, const Vec3d& d, const Vec3d& c, double r, double& t0, double& t1) {
     double dd = glm::dot(d, d);
-    if (!(dd > 0.0)) return -1.0;
+    if (!(dd > 0.0)) return false;
     Vec3d f = o - c;
     double b = -glm::dot(f, d);                   // = −b/2 in a t² + b t + c (unnormalised d)
     Vec3d l = f + (b / dd) * d;                   // f minus its projection on d
     double disc = dd * (r * r - glm::dot(l, l));  // = (b/2)² − a c, computed without cancellation
-    if (disc < 0.0) return -1.0;
+    if (disc < 0.0) return false;
     double cq = glm::dot(f, f) - r * r;
     double q = b + std::copysign(std::sqrt(disc), b);
-    double t0 = (q != 0.0) ? cq / q : 0.0;
-    double t1 = q / dd;
+    t0 = (q != 0.0) ? cq / q : 0.0;
+    t1 = q / dd;
     if (t0 > t1) std::swap(t0, t1);
+    return true;
+}
+
+/// Ray–sphere intersection in double precision (sphereRoots). Returns the nearest t in
+/// (ray.tMin, ray.tMax), or a negative value when there is none.
+inline double intersectSphere(const Vec3f& centerF, float radiusF, const Ray& ray) {
+    double t0, t1;
+    if (!sphereRoots(Vec3d(ray.o), Vec3d(ray.d), Vec3d(centerF), double(radiusF), t0, t1)) return -1.0;
     if (t0 > ray.tMin && t0 < ray.tMax) return t0;
     if (t1 > ray.tMin && t1 < ray.tMax) return t1;
     return -1.0;

@@ -39,6 +39,25 @@ private:
     MisVertex* data_;
 };
 
+/// p_NEE(x0 | x1) / p_origin(x0), both area densities at x0 (bdpt_mis.h, `neeOverOriginA`): next-event
+/// estimation from x1 samples a sphere light over the cone it subtends (LightSet::sampleOne), a light
+/// sub-path starts uniformly on its area. Triangle, punctual and infinite lights are sampled alike
+/// both ways (ratio 1). The reference point is offset off x1 towards x0, as next_event.h offsets it
+/// towards the side the light is sampled from: a function of the two vertices only, so every
+/// strategy of a path computes the same factor.
+float neeOverOriginA(const RenderContext& ctx, const PathVertex& x0, const PathVertex& x1) {
+    if (x0.lightIndex == kInvalidId || x0.atInfinity || x1.type != VertexType::Surface) return 1.f;
+    const LightSet& lights = ctx.scene.lights();
+    if (lights.light(x0.lightIndex).type != LightType::Sphere) return 1.f;
+    Vec3f d = x0.p - x1.p;
+    float dist2 = glm::dot(d, d);
+    if (!(dist2 > 0.f)) return 1.f;
+    Vec3f pRef = offsetRayOrigin(x1.p, glm::dot(d, x1.ng) >= 0.f ? x1.ng : -x1.ng);
+    float neeA = lights.pdfW(x0.lightIndex, pRef, x0.p, x0.ng) * std::abs(glm::dot(x0.ng, d)) / (dist2 * std::sqrt(dist2));
+    float originA = pdfLightOriginA(ctx, x0);
+    return neeA > 0.f && originA > 0.f ? neeA / originA : 1.f;
+}
+
 }  // namespace
 
 float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
@@ -54,11 +73,11 @@ float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> l
     const PathVertex* qsMinus = s >= 2 ? &light[size_t(s - 2)] : nullptr;
     const PathVertex* ptMinus = t >= 2 ? &camera[size_t(t - 2)] : nullptr;
 
-    // A resampled light endpoint (s = 1) is weighted with the density of the light sub-path's own
-    // origin sampling (pdfPosA). Exact for triangle and point lights (NEE also samples them by
-    // area / selection only); for spheres, whose NEE samples the visible cone, it is a proxy: the
-    // weights still sum to 1 over the strategies of every path, which is all unbiasedness needs
-    // (Veach 1997, §9.2.2, eq. 9.6). The same holds for ignoring Russian roulette in the densities.
+    // A resampled light endpoint (s = 1) enters the chain with the light sub-path's origin density
+    // like every other strategy's y0; the factor `nee` below turns p_1 into the density next-event
+    // estimation actually sampled it with (the visible cone of a sphere light). Russian roulette
+    // stays out of the densities: the weights still sum to 1 over the strategies of every path,
+    // which is all unbiasedness needs (Veach 1997, §9.2.2, eq. 9.6).
     if (s == 1) y[0] = {pdfLightOriginA(ctx, *qs), 0.f, false};  // pdfRevA: set below (the light sub-path may be empty)
     // The connection's endpoints scatter into the connection through a non-delta lobe, whatever lobe
     // their own walk sampled there (pbrt-v3's MISWeight resets them too); a camera endpoint on an
@@ -76,11 +95,15 @@ float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> l
     if (qsMinus) y[size_t(s - 2)].pdfRevA = pdfNextA(ctx, pt, *qs, *qsMinus);
 
     bool lightIsDelta = false;
+    float nee = 1.f;  // p_NEE / p_origin of x0 given x1, for the strategy s = 1 of this path
     if (s > 0) {
         const PathVertex& y0 = s == 1 ? *qs : light[0];
         lightIsDelta = ctx.scene.lights().isDelta(y0.lightIndex);  // point, spot, directional: never hit
+        nee = neeOverOriginA(ctx, y0, s == 1 ? *pt : light[1]);
+    } else if (ptMinus) {
+        nee = neeOverOriginA(ctx, *pt, *ptMinus);
     }
-    return bdptMisWeight({y.data(), size_t(s)}, {z.data(), size_t(t)}, lightIsDelta, heuristic);
+    return bdptMisWeight({y.data(), size_t(s)}, {z.data(), size_t(t)}, lightIsDelta, heuristic, nee);
 }
 
 ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,

@@ -32,9 +32,21 @@ enum class MisHeuristic { Balance, Power };
 ///     w_s = p_s^β / Σ_i p_i^β = 1 / (1 + Σ_{i≠s} (p_i / p_s)^β),
 /// and each (p_i / p_s) is a running product of pdfRevA/pdfFwdA ratios walking away from the
 /// connection on either sub-path. Terms whose strategy would connect at a delta vertex are left out
-/// (such a strategy has density 0); delta densities are stored as 0 and remapped to 1, since the
-/// same delta factor appears in both densities of a ratio (Veach 1997, §10.3.5; pbrt's remap0).
+/// (such a strategy has density 0). A density after a delta scattering is the delta's unit weight
+/// converted to area (path_vertex.h's deltaDensityA): the same delta factor appears in both
+/// densities of a ratio and cancels (Veach 1997, §10.3.5), its |cos|/d² does not. A density of 0
+/// (a vertex behind a one-sided emitter) is remapped to 1 (pbrt's remap0).
+///
+/// Strategy s = 1 samples x0 by next-event estimation, not by the light sub-path's origin
+/// sampling that strategies s ≥ 2 use: for a sphere light the visible cone from x1, whose area
+/// density at x0 differs from the sphere's uniform area density. The chain above uses the origin
+/// density p→(x0) for every strategy; `neeOverOriginA` = p_NEE(x0 | x1) / p→(x0) (both area
+/// densities, 1 where they agree: triangle, point and infinite lights) corrects the one density
+/// that differs: p_1 = neeOverOriginA · (p_1 of the chain). Every strategy of a path computes the
+/// same factor, so the weights still sum to one and the s = 1 weight uses the density that
+/// strategy was actually sampled with (as Mitsuba 0.6's BDPT does for its direct-sampling
+/// strategy).
 float bdptMisWeight(std::span<const MisVertex> light, std::span<const MisVertex> camera, bool lightIsDelta,
-                    MisHeuristic heuristic);
+                    MisHeuristic heuristic, float neeOverOriginA = 1.f);
 
 }  // namespace tessera

@@ -155,13 +155,14 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         // Densities are evaluated from the vertex positions rather than taken from the sampling
         // routine: the connection code evaluates them the same way, so every strategy sees exactly
         // the same p→/p← for a vertex and the weights sum to one to rounding (grazing cosine-
-        // hemisphere samples otherwise differ by a few percent). Delta densities stay 0.
+        // hemisphere samples otherwise differ by a few percent). After a delta scattering the
+        // density is the delta's unit weight converted to area (deltaDensityA).
         const size_t n = out.size();
         const PathVertex& prev = out[n - 1];
-        v.pdfFwdA = prev.delta ? 0.f : pdfNextA(ctx, n >= 2 ? &out[n - 2] : nullptr, prev, v);
+        v.pdfFwdA = prev.delta ? deltaDensityA(prev, v) : pdfNextA(ctx, n >= 2 ? &out[n - 2] : nullptr, prev, v);
         // The successor now exists: the density of the predecessor's predecessor being sampled
         // from `prev` given `v` (Veach's p←), i.e. pdfRevA of out[n − 2].
-        if (n >= 2) out[n - 2].pdfRevA = prev.delta ? 0.f : pdfNextA(ctx, &v, prev, out[n - 2]);
+        if (n >= 2) out[n - 2].pdfRevA = prev.delta ? deltaDensityA(prev, out[n - 2]) : pdfNextA(ctx, &v, prev, out[n - 2]);
         out.push_back(v);
         if (!found || int(out.size()) >= limit) break;
 

@@ -6,8 +6,10 @@
 ///  * `pdfFwdA`: area density of the vertex being sampled from its predecessor on its own sub-path;
 ///  * `pdfRevA`: area density of it being sampled from its successor, i.e. by a sub-path walking the
 ///    other way (filled in once the successor exists, and again for the connection).
-/// A vertex reached after a delta scattering event stores 0 for densities that contain the delta;
-/// the MIS code remaps them to 1 (the deltas cancel in the ratios, Veach 1997, §10.3.5).
+/// A vertex reached by a delta scattering event stores the delta's unit weight converted to area,
+/// |cos θ| / d² (deltaDensityA): every strategy that can build the path has the same delta factor
+/// per specular vertex, so it cancels in the MIS ratios, but the conversion to area does not —
+/// it is taken at the vertex after the specular one on one side and before it on the other.
 /// Vertices "at infinity" (a light sub-path starting at the environment or a directional light, a
 /// camera sub-path escaping to the environment) have a direction, not a position: densities towards
 /// them stay in solid angle, and the density of the first vertex after one is the planar density of
@@ -65,6 +67,14 @@ inline Vec3f directionTo(const PathVertex& a, const PathVertex& b) {
 /// Converts a solid-angle density at `from` into an area density at `to`: pdfW · |cos θ_to| / d²
 /// (Veach 1997, eq. 8.10); no cosine when `to` is not on a surface; unchanged when `to` is at infinity.
 float convertDensity(float pdfW, const PathVertex& from, const PathVertex& to);
+
+/// The density of a delta scattering at `cur` towards `next` with the delta's weight set to 1,
+/// converted to area at `next`: |cos θ_next| / d² (Veach 1997, §10.3.5; SmallVCM keeps the same
+/// cos/d² through specular vertices). Storing 0 there instead (pbrt-v3's remap0) drops the
+/// factor and misweights paths through mirrors: the ratio of two strategies then carries
+/// d²(before)/d²(after) of the specular vertex, which on a caustic next to its mirror hands the
+/// path to the strategy that samples it worst.
+inline float deltaDensityA(const PathVertex& cur, const PathVertex& next) { return convertDensity(1.f, cur, next); }
 
 /// Area density at `next` of `cur` sampling `next`, given that `cur` was reached from `prev`
 /// (ignored for camera and light vertices): the BSDF, camera or light-emission direction density.

@@ -4,6 +4,8 @@
 #include <zlib.h>
 
 #include <cstdio>
+#include <climits>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <memory>
@@ -17,7 +19,7 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr char kMagic[8] = {'T', 'E', 'S', 'S', 'C', 'K', 'P', 'T'};
-constexpr uint32_t kFormatVersion = 1;
+constexpr uint32_t kFormatVersion = 2;
 constexpr uint32_t kByteOrderMark = 0x01020304u;
 /// magic + version + byte-order mark + header length + payload length + CRC.
 constexpr uint64_t kFramingBytes = 8 + 4 + 4 + 8 + 8 + 4;
@@ -75,8 +77,11 @@ public:
         if (n > 0 && std::fread(p, 1, n, f_) != n)
             throw InputError(path_ + ": cannot read checkpoint (" + what + "): " + std::strerror(errno));
         left_ -= n;
-        crc_ = crc32Update(crc_, p, n);
+        if (checksumming_) crc_ = crc32Update(crc_, p, n);
     }
+    /// After readFraming has verified the checksum of the whole payload, reading it need not
+    /// compute it again (a 4K film is 1.2 GB).
+    void payloadVerified() { checksumming_ = false; }
     template <class T>
     T value(const char* what) {
         T v;
@@ -95,6 +100,7 @@ private:
     const std::string& path_;
     uint64_t left_;
     uLong crc_ = crc32(0L, Z_NULL, 0);
+    bool checksumming_ = true;
 };
 
 std::string headerText(const CheckpointHeader& header) {
@@ -125,7 +131,7 @@ uint64_t payloadBytes(const Film& film, const RenderState& s) {
         n += s.tileDone.size();
         for (const auto& e : s.pendingSplats) n += 8 + e.size() * sizeof(SplatSink::Entry);
     }
-    return n + pixels * (9 * sizeof(double) + sizeof(uint32_t));
+    return n + pixels * (9 * sizeof(FilmAccum) + sizeof(uint32_t));
 }
 
 static_assert(sizeof(SplatSink::Entry) == 16, "checkpoint splat entries are 4-byte index + 3 floats");
@@ -218,6 +224,7 @@ std::string readFraming(Reader& r, FILE* f, const std::string& path, uint64_t si
         if (std::fread(&stored, sizeof stored, 1, f) != 1) throw InputError(path + ": checkpoint is truncated (no checksum)");
         if (uint32_t(crc) != stored) throw InputError(path + ": checkpoint is corrupt (CRC-32 mismatch)");
         std::fseek(f, bodyStart, SEEK_SET);
+        r.payloadVerified();
     }
     return text;
 }
@@ -226,7 +233,9 @@ std::string readFraming(Reader& r, FILE* f, const std::string& path, uint64_t si
 /// with both values.
 void checkSettings(const std::string& path, const std::string& text, const CheckpointHeader& expected) {
     CheckpointHeader found = parseHeader(text);
-    for (const auto& [key, value] : expected) {
+    for (const auto& setting : expected) {
+        const std::string& key = setting.first;
+        const std::string& value = setting.second;
         auto it = std::find_if(found.begin(), found.end(), [&](const auto& kv) { return kv.first == key; });
         std::string have = it == found.end() ? "(absent)" : it->second;
         if (have != value)
@@ -235,12 +244,14 @@ void checkSettings(const std::string& path, const std::string& text, const Check
     }
 }
 
-/// The scheduler's state (render/renderer.h) as writeCheckpoint stores it, for a film of `film`'s size.
-RenderState readState(Reader& r, const std::string& path, const Film& film) {
+/// The film size as writeCheckpoint stores it (the payload's first two values).
+std::pair<uint32_t, uint32_t> readFilmSize(Reader& r) {
     uint32_t width = r.value<uint32_t>("resolution"), height = r.value<uint32_t>("resolution");
-    if (int64_t(width) != film.width() || int64_t(height) != film.height())
-        throw InputError(path + ": checkpoint film is " + std::to_string(width) + "x" + std::to_string(height) + ", this render " +
-                         std::to_string(film.width()) + "x" + std::to_string(film.height()));
+    return {width, height};
+}
+
+/// The scheduler's state (render/renderer.h) as writeCheckpoint stores it, after the film size.
+RenderState readState(Reader& r, const std::string& path, uint32_t width, uint32_t height) {
     RenderState s;
     s.sppDone = r.value<uint32_t>("state");
     s.passSpp = r.value<uint32_t>("state");
@@ -274,6 +285,16 @@ RenderState readState(Reader& r, const std::string& path, const Film& film) {
     return s;
 }
 
+/// The film's accumulation state, the last part of the payload; nothing but the CRC may follow.
+void readFilm(Reader& r, const std::string& path, Film& film) {
+    const uint64_t need = uint64_t(film.width()) * uint64_t(film.height()) * (9 * sizeof(FilmAccum) + sizeof(uint32_t)) + 4;
+    if (r.left() != need) throw InputError(path + ": checkpoint is corrupt (payload size does not match its contents)");
+    r.array(film.sumData(), "film sums");
+    r.array(film.sumSqData(), "film sums of squares");
+    r.array(film.splatData(), "film splats");
+    r.array(film.countData(), "film sample counts");
+}
+
 }  // namespace
 
 RenderState readCheckpoint(const std::string& path, const CheckpointHeader& expected, Film& film) {
@@ -286,13 +307,59 @@ RenderState readCheckpoint(const std::string& path, const CheckpointHeader& expe
 
     std::string text = readFraming(r, f.get(), path, size);
     checkSettings(path, text, expected);
-    RenderState s = readState(r, path, film);
-    r.array(film.sumData(), "film sums");
-    r.array(film.sumSqData(), "film sums of squares");
-    r.array(film.splatData(), "film splats");
-    r.array(film.countData(), "film sample counts");
-    if (r.left() != 4) throw InputError(path + ": checkpoint is corrupt (payload size does not match its contents)");
+    auto [width, height] = readFilmSize(r);
+    if (int64_t(width) != film.width() || int64_t(height) != film.height())
+        throw InputError(path + ": checkpoint film is " + std::to_string(width) + "x" + std::to_string(height) + ", this render " +
+                         std::to_string(film.width()) + "x" + std::to_string(film.height()));
+    RenderState s = readState(r, path, width, height);
+    readFilm(r, path, film);
     return s;
+}
+
+CheckpointHeader readCheckpointHeader(const std::string& path) {
+    std::error_code ec;
+    uint64_t size = fs::file_size(path, ec);
+    if (ec) throw InputError(path + ": cannot read (" + ec.message() + ")");
+    File f(std::fopen(path.c_str(), "rb"));
+    if (!f) throw InputError(path + ": cannot open: " + std::strerror(errno));
+    Reader r(f.get(), path, size);
+    char magic[8];
+    r.bytes(magic, sizeof magic, "magic number");
+    if (std::memcmp(magic, kMagic, sizeof magic) != 0) throw InputError(path + ": not a Tessera checkpoint or partial");
+    uint32_t version = r.value<uint32_t>("format version");
+    uint32_t bom = r.value<uint32_t>("byte-order mark");
+    if (bom != kByteOrderMark) throw InputError(path + ": checkpoint was written on a machine of the other byte order");
+    if (version != kFormatVersion)
+        throw InputError(path + ": checkpoint format version " + std::to_string(version) + ", this tessera reads version " +
+                         std::to_string(kFormatVersion));
+    uint64_t headerBytes = r.value<uint64_t>("header length");
+    if (headerBytes > r.left()) throw InputError(path + ": checkpoint is truncated (ends inside the header)");
+    std::string text(headerBytes, '\0');
+    r.bytes(text.data(), text.size(), "header");
+    return parseHeader(text);
+}
+
+CheckpointContents readCheckpointContents(const std::string& path) {
+    std::error_code ec;
+    uint64_t size = fs::file_size(path, ec);
+    if (ec) throw InputError(path + ": cannot read (" + ec.message() + ")");
+    File f(std::fopen(path.c_str(), "rb"));
+    if (!f) throw InputError(path + ": cannot open: " + std::strerror(errno));
+    Reader r(f.get(), path, size);
+
+    CheckpointContents c;
+    c.header = parseHeader(readFraming(r, f.get(), path, size));
+    auto [width, height] = readFilmSize(r);
+    // Allocate only what the file can hold: its length was checked against the payload length.
+    constexpr uint64_t perPixel = 9 * sizeof(FilmAccum) + sizeof(uint32_t);
+    if (width == 0 || height == 0 || width > uint32_t(INT32_MAX) || height > uint32_t(INT32_MAX) ||
+        uint64_t(height) > r.left() / perPixel / width)
+        throw InputError(path + ": checkpoint is corrupt (a " + std::to_string(width) + "x" + std::to_string(height) +
+                         " film does not fit in its " + std::to_string(size) + " bytes)");
+    c.state = readState(r, path, width, height);
+    c.film = std::make_unique<Film>(int(width), int(height));
+    readFilm(r, path, *c.film);
+    return c;
 }
 
 }  // namespace tessera

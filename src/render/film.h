@@ -4,6 +4,15 @@
 /// (box filter: a sample counts for the pixel it was taken in) and its sample count; a separate
 /// splat image collects light-tracing style contributions. Tiles own disjoint pixels, so
 /// addSample needs no locking; splats are merged by the scheduler in tile order.
+///
+/// The sums are exact and order-independent: every contribution is rounded once, on its own, to a
+/// signed 128-bit fixed-point number with 64 fraction bits (a multiple of 2^-64 ~ 5.4e-20, at most
+/// 2^62 ~ 4.6e18 in magnitude), and integer addition is associative. A pixel's sums are right while
+/// they stay below 2^63 ~ 9.2e18 (for the sum of squares: samples below ~3e9). So a film holding samples
+/// [0, N) has the same bits however those samples were grouped, ordered or split across processes:
+/// `render --samples A:B` partials merged by `tessera merge` equal a single render bit for bit
+/// (writeup, "Farm rendering"). Floating-point sums would differ in the last bits with the grouping.
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -11,15 +20,33 @@
 
 namespace tessera {
 
+/// One exact accumulator: a value v is held as round-toward-zero(v * 2^64) (see above).
+__extension__ typedef __int128 FilmAccum;
+
+/// a += b modulo 2^128 (unsigned arithmetic: wrapping is defined, and addition modulo 2^128 is
+/// still associative, so the order-independence holds even past the range).
+inline void addFilmAccum(FilmAccum& a, FilmAccum b) {
+    __extension__ typedef unsigned __int128 U;
+    a = FilmAccum(U(a) + U(b));
+}
+/// v as a FilmAccum: truncated to a multiple of 2^-64, saturated at +-2^62.
+inline FilmAccum toFilmAccum(double v) {
+    double scaled = v * 0x1p64;
+    if (!(std::fabs(scaled) < 0x1p126)) return scaled > 0 ? FilmAccum(1) << 126 : -(FilmAccum(1) << 126);
+    return FilmAccum(scaled);
+}
+/// The accumulator's value, rounded to the nearest double.
+inline double filmAccumValue(FilmAccum a) { return double(a) * 0x1p-64; }
+
 class Film {
 public:
     Film(int width, int height);
 
     /// Bytes a width x height film takes while rendering and writing out: sum, sum of squares and
-    /// splats in double per channel plus a sample count (the accumulation state), and one rgba()
+    /// splats as a FilmAccum per channel plus a sample count (the accumulation state), and one rgba()
     /// image. Lets a caller refuse a resolution before allocating it.
     static double memoryBytes(int width, int height) {
-        return double(width) * double(height) * (9.0 * sizeof(double) + sizeof(uint32_t) + 4 * sizeof(float));
+        return double(width) * double(height) * (9.0 * sizeof(FilmAccum) + sizeof(uint32_t) + 4 * sizeof(float));
     }
 
     int width() const { return width_; }
@@ -28,16 +55,21 @@ public:
     void addSample(int x, int y, const Rgb& L) {
         size_t i = size_t(y) * size_t(width_) + size_t(x);
         for (int c = 0; c < 3; ++c) {
-            sum_[3 * i + c] += double(L[c]);
-            sumSq_[3 * i + c] += double(L[c]) * double(L[c]);
+            // A float's square is exact in double (24 + 24 significant bits).
+            addFilmAccum(sum_[3 * i + c], toFilmAccum(double(L[c])));
+            addFilmAccum(sumSq_[3 * i + c], toFilmAccum(double(L[c]) * double(L[c])));
         }
         ++count_[i];
     }
     void addSplat(uint32_t pixelIndex, const Rgb& v) {
-        for (int c = 0; c < 3; ++c) splat_[3 * size_t(pixelIndex) + c] += double(v[c]);
+        for (int c = 0; c < 3; ++c) addFilmAccum(splat_[3 * size_t(pixelIndex) + c], toFilmAccum(double(v[c])));
     }
     /// Number of passes' worth of samples per pixel the splat image holds (divides it).
     void setSplatSppDouble(double spp) { splatSpp_ = spp; }
+    double splatSpp() const { return splatSpp_; }
+    /// Adds another film's accumulation state (same size) to this one: the film that holds both
+    /// films' samples, bit for bit (see above). The splat divisor is left to the caller.
+    void accumulate(const Film& other);
 
     uint32_t sampleCount(int x, int y) const { return count_[size_t(y) * size_t(width_) + size_t(x)]; }
     /// Mean of the pixel's samples plus its share of the splats.
@@ -50,21 +82,21 @@ public:
     /// Packed float RGBA of the per-pixel standard error of the mean (alpha as in rgba()).
     std::vector<float> standardErrorRgba() const;
 
-    /// The raw accumulation state, for checkpoints (render/checkpoint.h): 3 doubles per pixel for
-    /// sum, sum of squares and splats, one count per pixel. Restoring these restores the film bit
-    /// for bit; the sizes never change.
-    std::vector<double>& sumData() { return sum_; }
-    std::vector<double>& sumSqData() { return sumSq_; }
-    std::vector<double>& splatData() { return splat_; }
+    /// The raw accumulation state, for checkpoints and partials (render/checkpoint.h): 3
+    /// accumulators per pixel for sum, sum of squares and splats, one count per pixel. Restoring
+    /// these restores the film bit for bit; the sizes never change.
+    std::vector<FilmAccum>& sumData() { return sum_; }
+    std::vector<FilmAccum>& sumSqData() { return sumSq_; }
+    std::vector<FilmAccum>& splatData() { return splat_; }
     std::vector<uint32_t>& countData() { return count_; }
-    const std::vector<double>& sumData() const { return sum_; }
-    const std::vector<double>& sumSqData() const { return sumSq_; }
-    const std::vector<double>& splatData() const { return splat_; }
+    const std::vector<FilmAccum>& sumData() const { return sum_; }
+    const std::vector<FilmAccum>& sumSqData() const { return sumSq_; }
+    const std::vector<FilmAccum>& splatData() const { return splat_; }
     const std::vector<uint32_t>& countData() const { return count_; }
 
 private:
     int width_, height_;
-    std::vector<double> sum_, sumSq_, splat_;
+    std::vector<FilmAccum> sum_, sumSq_, splat_;
     std::vector<uint32_t> count_;
     double splatSpp_ = 0.0;
 };

@@ -34,6 +34,9 @@ public:
         : ctx_(ctx), integrator_(integrator), film_(film), opt_(opt), tiles_(makeTiles(film.width(), film.height(), opt.tileSize)),
           splats_(tiles_.size()), tileDone_(tiles_.size(), 0), st_(opt.resume ? *opt.resume : RenderState{}),
           nonFinite_(st_.nonFinite), firstNonFinite_(st_.firstNonFinite) {
+        if (opt.firstSample > 0 && (opt.resume || opt.timeLimitSeconds > 0.0))
+            throw std::invalid_argument("renderImage: a sample range cannot be time-bounded or resumed");
+        if (!opt.resume) s0_ = opt.firstSample;
         if (!st_.tileDone.empty() && (st_.tileDone.size() != tiles_.size() || st_.pendingSplats.size() != tiles_.size()))
             throw std::invalid_argument("renderImage: the resumed state has " + std::to_string(st_.tileDone.size()) +
                                         " tiles, the film " + std::to_string(tiles_.size()));
@@ -190,7 +193,7 @@ RenderStats TileScheduler::run() {
             break;
         }
     }
-    stats.sppCompleted = s0_;
+    stats.sppCompleted = s0_ - std::min(s0_, opt_.firstSample);
     // Splats are estimates per camera sample of the whole image: divide by samples per pixel taken.
     uint64_t pixelsTotal = uint64_t(film_.width()) * uint64_t(film_.height());
     film_.setSplatSppDouble(pixelsTotal > 0 ? double(stats.samples) / double(pixelsTotal) : 0.0);

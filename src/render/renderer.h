@@ -43,6 +43,9 @@ struct RenderState {
 
 struct RenderOptions {
     int spp = 16;                   ///< samples per pixel (ignored when timeLimitSeconds > 0)
+    /// Render sample indices [firstSample, spp) of every pixel (`render --samples A:B`): exactly
+    /// the samples a render from 0 draws for those indices. Not with timeLimitSeconds or resume.
+    uint32_t firstSample = 0;
     double timeLimitSeconds = 0.0;  ///< > 0: render passes until this budget is spent
     int threads = 0;                ///< 0 = all cores the process may use (hardwareThreads())
     uint64_t seed = 0;
@@ -60,7 +63,7 @@ struct RenderOptions {
 };
 
 struct RenderStats {
-    uint32_t sppCompleted = 0;    ///< samples per pixel of every pixel (complete passes)
+    uint32_t sppCompleted = 0;    ///< samples per pixel of every pixel (complete passes; past firstSample)
     uint64_t samples = 0;         ///< camera samples taken, including a partial last pass
     uint64_t nonFiniteDropped = 0;  ///< samples (or splats) that were NaN/Inf and never reached the film
     double seconds = 0.0;         ///< all sessions, when resumed

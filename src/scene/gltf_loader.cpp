@@ -353,7 +353,7 @@ private:
         const gl::Node& node = model_.nodes[size_t(index)];
         Mat4d world = parent * localTransform(node, el);
         if (node.mesh >= 0) readMesh(node.mesh, world, el);
-        if (node.camera >= 0) readCamera(node.camera, world, el);
+        if (node.camera >= 0) readCamera(node.camera, world, el, node.name);
         if (auto it = node.extensions.find("KHR_lights_punctual"); it != node.extensions.end())
             readGltfPunctualLight(model_, values_, it->second, world, el + ".extensions.KHR_lights_punctual", scene_, warnings_);
         if (auto it = node.extensions.find("TESSERA_sphere"); it != node.extensions.end())
@@ -365,10 +365,23 @@ private:
         for (int c : node.children) visitNode(c, world, depth + 1);
     }
 
-    void readCamera(int index, const Mat4d& world, const std::string& nodeEl) {
-        const std::string el = idx("cameras", size_t(std::max(index, 0)));
-        if (size_t(index) >= model_.cameras.size()) fail(nodeEl, "camera index out of range");
-        if (scene_.camera) return;  // the first camera in traversal order is used
+    /// Records every placed camera; the first in traversal order is the scene's camera and must be
+    /// renderable, a later one that is not is kept with its problem (an error only if picked).
+    void readCamera(int index, const Mat4d& world, const std::string& nodeEl, const std::string& nodeName) {
+        if (index < 0 || size_t(index) >= model_.cameras.size()) fail(nodeEl, "camera index out of range");
+        SceneCamera entry{index, model_.cameras[size_t(index)].name, nodeName, std::nullopt, ""};
+        try {
+            entry.desc = cameraDesc(index, world, nodeEl);
+        } catch (const SceneError& e) {
+            if (!scene_.camera) throw;
+            entry.problem = e.what();
+        }
+        if (!scene_.camera) scene_.camera = entry.desc;
+        scene_.cameras.push_back(std::move(entry));
+    }
+
+    CameraDesc cameraDesc(int index, const Mat4d& world, const std::string& nodeEl) const {
+        const std::string el = idx("cameras", size_t(index));
         const gl::Camera& cam = model_.cameras[size_t(index)];
         if (cam.type != "perspective") fail(el, "only perspective cameras are supported (got '" + cam.type + "')");
         double yfov = cam.perspective.yfov;
@@ -392,7 +405,7 @@ private:
             if (d.apertureRadius < 0.f) fail(tel, "apertureRadius must be >= 0");
             if (!(d.focusDistance > 0.f)) fail(tel, "focusDistance must be > 0");
         }
-        scene_.camera = d;
+        return d;
     }
 
 

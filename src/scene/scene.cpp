@@ -12,7 +12,7 @@ void Scene::finalize() {
 
 Scene::Scene(Scene&& o) noexcept
     : geometry(std::move(o.geometry)), materials(std::move(o.materials)), images(std::move(o.images)), pointLights(std::move(o.pointLights)),
-      spotLights(std::move(o.spotLights)), directionalLights(std::move(o.directionalLights)), environment(std::move(o.environment)), camera(std::move(o.camera)),
+      spotLights(std::move(o.spotLights)), directionalLights(std::move(o.directionalLights)), environment(std::move(o.environment)), camera(std::move(o.camera)), cameras(std::move(o.cameras)),
       settings(std::move(o.settings)), sourcePath(std::move(o.sourcePath)), lights_(std::move(o.lights_)) {
     lights_.rebind(geometry);
 }
@@ -26,6 +26,7 @@ Scene& Scene::operator=(Scene&& o) noexcept {
     directionalLights = std::move(o.directionalLights);
     environment = std::move(o.environment);
     camera = std::move(o.camera);
+    cameras = std::move(o.cameras);
     settings = std::move(o.settings);
     sourcePath = std::move(o.sourcePath);
     lights_ = std::move(o.lights_);

@@ -37,6 +37,15 @@ struct SurfaceInteraction {
     Vec2f bary{0.f};               ///< the hit's (u, v): barycentrics of vertices 1 and 2 (triangles)
 };
 
+/// A camera the scene file places (glTF: a node with a camera), for picking one by name or index.
+struct SceneCamera {
+    int index = -1;        ///< its index in the file's cameras[]
+    std::string name;      ///< the camera's name
+    std::string nodeName;  ///< the name of the node that places it
+    std::optional<CameraDesc> desc;  ///< empty: not renderable, `problem` says why
+    std::string problem;
+};
+
 class Scene {
 public:
     Scene() = default;
@@ -53,7 +62,8 @@ public:
     std::vector<SpotLightDesc> spotLights;    ///< KHR_lights_punctual spot lights (world space)
     std::vector<DirectionalLightDesc> directionalLights;  ///< KHR_lights_punctual directional lights
     std::optional<EnvironmentDesc> environment;           ///< TESSERA_environment or --env
-    std::optional<CameraDesc> camera;
+    std::optional<CameraDesc> camera;   ///< the camera a render uses: the file's first (or the command line's)
+    std::vector<SceneCamera> cameras;   ///< every camera the file places, in traversal order
     RenderSettings settings;
     std::string sourcePath;  ///< the file it was loaded from (for messages and metadata)
 

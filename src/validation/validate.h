@@ -19,8 +19,9 @@ struct ValidationTolerances {
     float tRelative = 1e-5f;  ///< |Δt| ≤ tRelative·t (plus a few ulps of the origin's magnitude)
     float uv = 1e-4f;         ///< |Δu|, |Δv| on the same triangle
     float normalCos = 0.9999f;  ///< dot(ng_test, ng_ref) at least this
-    /// Float precision in ulps of the coordinates' magnitude: how far from an edge (or a sphere's
-    /// silhouette) a ray may pass and still be called a tie when the two answers differ.
+    /// Float precision in ulps of the coordinates' magnitude: how far rounding may move a triangle's
+    /// edges or a sphere's surface (a triangle's plane: times its condition number), so how far from
+    /// an edge or silhouette a ray may pass and still be called a tie when the two answers differ.
     float edgeUlps = 64.f;
 };
 

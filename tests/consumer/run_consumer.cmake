@@ -1,7 +1,8 @@
 # The `library_consumer` test: install the freshly built Tessera into a scratch prefix, configure and
 # build tests/consumer against it with find_package(Tessera), and run it.
-#   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -DSCENE=... -P run_consumer.cmake
-foreach(var BUILD_DIR SOURCE_DIR WORK_DIR SCENE)
+# It also validates on the lattice and hairball of the pathology battery, written by PATHOLOGY_WRITER.
+#   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -DSCENE=... -DPATHOLOGY_WRITER=... -P run_consumer.cmake
+foreach(var BUILD_DIR SOURCE_DIR WORK_DIR SCENE PATHOLOGY_WRITER)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "run_consumer.cmake: ${var} not set")
   endif()
@@ -28,5 +29,8 @@ endif()
 run("configure consumer" ${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/consumer -B ${WORK_DIR}/build
     -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release ${san_flags})
 run("build consumer" ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
-run("run consumer" ${WORK_DIR}/build/consumer ${SCENE})
+file(MAKE_DIRECTORY ${WORK_DIR}/meshes)
+run("write pathology meshes" ${PATHOLOGY_WRITER} ${WORK_DIR}/meshes)
+run("run consumer" ${WORK_DIR}/build/consumer ${SCENE}
+    ${WORK_DIR}/meshes/integer-lattice.obj ${WORK_DIR}/meshes/sliver-hairball.obj)
 message("${last_output}")
