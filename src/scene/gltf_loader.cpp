@@ -16,6 +16,7 @@
 #include "scene/gltf_extensions.h"
 #include "scene/gltf_files.h"
 #include "scene/gltf_lights.h"
+#include "scene/gltf_components.h"
 #include "scene/gltf_textures.h"
 #include "scene/mesh_loader.h"
 #include "scene/tangents.h"
@@ -31,33 +32,6 @@ std::string idx(const char* array, size_t i) { return std::string(array) + "[" +
 constexpr std::initializer_list<int> kFloatOrQuantized = {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE,
                                                           TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_SHORT,
                                                           TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT};
-
-/// One integer accessor component (unaligned bytes, little endian) as a float. Normalized integers
-/// map as glTF 2.0 §3.11 defines: f = max(c / 127, −1), c / 255, max(c / 32767, −1), c / 65535.
-float componentAsFloat(const unsigned char* p, int componentType, bool normalized) {
-    switch (componentType) {
-        case TINYGLTF_COMPONENT_TYPE_BYTE: {
-            auto c = float(int8_t(p[0]));
-            return normalized ? std::max(c / 127.f, -1.f) : c;
-        }
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? float(p[0]) / 255.f : float(p[0]);
-        case TINYGLTF_COMPONENT_TYPE_SHORT: {
-            int16_t c;
-            std::memcpy(&c, p, 2);
-            return normalized ? std::max(float(c) / 32767.f, -1.f) : float(c);
-        }
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
-            uint16_t c;
-            std::memcpy(&c, p, 2);
-            return normalized ? float(c) / 65535.f : float(c);
-        }
-        default: {
-            float f;
-            std::memcpy(&f, p, 4);
-            return f;
-        }
-    }
-}
 
 /// How deep TESSERA_asset_gltf assets may name further assets (a cycle of assets stops here).
 constexpr int kMaxAssetNesting = 8;
