@@ -7,8 +7,10 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "geometry/alpha_mask.h"
+#include "geometry/instances.h"
 #include "geometry/intersect.h"
 
 namespace tessera {
@@ -117,20 +119,8 @@ void fillRay(const Ray& r, RTCRay& er) {
     er.flags = 0;
 }
 
-}  // namespace
-
-EmbreeAccel::EmbreeAccel(const SceneGeometry& geometry, const AccelOptions& options) : geometry_(geometry) {
-    auto start = std::chrono::steady_clock::now();
-    std::string config = options.threads > 0 ? "threads=" + std::to_string(options.threads) : std::string();
-    RTCDevice device = rtcNewDevice(config.c_str());
-    if (!device) throw std::runtime_error("Embree: cannot create a device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
-    device_ = device;
-    rtcSetDeviceErrorFunction(device, embreeErrorCallback, nullptr);
-
-    RTCScene scene = rtcNewScene(device);
-    scene_ = scene;
-    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
-
+/// Attaches the meshes of `geometry` (flat meshes, or a prototype's) to `scene` by their geomId.
+void attachMeshes(RTCDevice device, RTCScene scene, const SceneGeometry& geometry) {
     for (uint32_t g = 0; g < geometry.meshes.size(); ++g) {
         const TriangleMesh& mesh = geometry.meshes[g];
         if (mesh.triangles.empty()) continue;  // ids stay aligned: attached by id below
@@ -154,6 +144,23 @@ EmbreeAccel::EmbreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
         rtcAttachGeometryByID(scene, geom, g);
         rtcReleaseGeometry(geom);
     }
+}
+
+}  // namespace
+
+EmbreeAccel::EmbreeAccel(const SceneGeometry& geometry, const AccelOptions& options) : geometry_(geometry) {
+    auto start = std::chrono::steady_clock::now();
+    std::string config = options.threads > 0 ? "threads=" + std::to_string(options.threads) : std::string();
+    RTCDevice device = rtcNewDevice(config.c_str());
+    if (!device) throw std::runtime_error("Embree: cannot create a device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+    device_ = device;
+    rtcSetDeviceErrorFunction(device, embreeErrorCallback, nullptr);
+
+    RTCScene scene = rtcNewScene(device);
+    scene_ = scene;
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
+
+    attachMeshes(device, scene, geometry);
     if (!geometry.spheres.empty()) {
         RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
         rtcSetGeometryUserPrimitiveCount(geom, unsigned(geometry.spheres.size()));
@@ -179,17 +186,45 @@ EmbreeAccel::EmbreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
             return true;
         },
         &liveBytes);
+    // Instances: each prototype used is a scene of its own (object space, meshes attached by their
+    // prototype geomId), committed once; each instance an Embree instance geometry of it with the
+    // instance's transform, attached at instanceGeomBase() + its index, so the hit's instID names it.
+    std::vector<bool> used(geometry.prototypes.size(), false);
+    for (const MeshInstance& inst : geometry.instances) used[inst.prototype] = true;
+    prototypeScenes_.assign(geometry.prototypes.size(), nullptr);
+    int64_t vertexBytes = 0;
+    for (size_t p = 0; p < geometry.prototypes.size(); ++p) {
+        if (!used[p]) continue;
+        RTCScene protoScene = rtcNewScene(device);
+        prototypeScenes_[p] = protoScene;
+        rtcSetSceneBuildQuality(protoScene, RTC_BUILD_QUALITY_MEDIUM);
+        int64_t before = liveBytes.load(std::memory_order_acquire);
+        attachMeshes(device, protoScene, geometry.prototypes[p]);
+        vertexBytes += liveBytes.load(std::memory_order_acquire) - before;  // Embree's copy of the vertex data
+        rtcCommitScene(protoScene);
+    }
+    for (uint32_t i = 0; i < geometry.instances.size(); ++i) {
+        const MeshInstance& inst = geometry.instances[i];
+        RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+        rtcSetGeometryInstancedScene(geom, static_cast<RTCScene>(prototypeScenes_[inst.prototype]));
+        rtcSetGeometryTransform(geom, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &inst.objectToWorld[0][0]);
+        rtcCommitGeometry(geom);
+        rtcAttachGeometryByID(scene, geom, instanceGeomBase() + i);
+        rtcReleaseGeometry(geom);
+    }
     rtcCommitScene(scene);
     rtcSetDeviceMemoryMonitorFunction(device, nullptr, nullptr);
-    stats_.memoryBytes = size_t(std::max<int64_t>(0, liveBytes.load(std::memory_order_acquire)));
+    stats_.memoryBytes = size_t(std::max<int64_t>(0, liveBytes.load(std::memory_order_acquire) - vertexBytes));
 
     bounds_ = geometry.bounds();
-    stats_.primitives = geometry.primitiveCount();
+    stats_.primitives = geometry.primitiveCount() + geometry.instancedPrimitiveCount();
     stats_.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 EmbreeAccel::~EmbreeAccel() {
     if (scene_) rtcReleaseScene(static_cast<RTCScene>(scene_));
+    for (void* p : prototypeScenes_)
+        if (p) rtcReleaseScene(static_cast<RTCScene>(p));
     if (device_) rtcReleaseDevice(static_cast<RTCDevice>(device_));
 }
 
@@ -216,13 +251,14 @@ bool EmbreeAccel::intersectWith(const Ray& ray, Hit& hit, bool coherent) const {
     hit.v = rh.hit.v;
     hit.geomId = rh.hit.geomID;
     hit.primId = rh.hit.primID;
-    if (hit.geomId < geometry_.meshes.size()) {
+    hit.instId = rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID ? kInvalidId : rh.hit.instID[0] - instanceGeomBase();
+    if (const TriangleMesh* mesh = geometry_.meshOf(hit.geomId, hit.instId)) {
         // Recompute the normal from the vertices, exactly as every other backend does, so records
         // compare bit for bit and orientation follows our winding convention.
-        const TriangleMesh& mesh = geometry_.meshes[hit.geomId];
-        const glm::uvec3& tri = mesh.triangles[hit.primId];
-        const Vec3f &p0 = mesh.positions[tri.x], &p1 = mesh.positions[tri.y], &p2 = mesh.positions[tri.z];
+        const glm::uvec3& tri = mesh->triangles[hit.primId];
+        const Vec3f &p0 = mesh->positions[tri.x], &p1 = mesh->positions[tri.y], &p2 = mesh->positions[tri.z];
         hit.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+        if (hit.instId != kInvalidId) hit.ng = instanceNormalToWorld(geometry_.instances[hit.instId], hit.ng);
     } else {
         hit.ng = Vec3f(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
     }

@@ -3,7 +3,10 @@
 /// Embree 3 backend: the production default and the oracle our own structures are validated against.
 /// Triangles use Embree's native triangle geometry (build quality MEDIUM: binned SAH BVH8); spheres
 /// are Embree user geometry calling our double-precision test, because Embree's float sphere
-/// primitive shows acne on the radius-1e4 walls of the sphere Cornell box.
+/// primitive shows acne on the radius-1e4 walls of the sphere Cornell box. Mesh instances use
+/// Embree's instance API: a scene per prototype, an RTC_GEOMETRY_TYPE_INSTANCE per instance.
+#include <vector>
+
 #include "accel/accel.h"
 
 namespace tessera {
@@ -24,10 +27,13 @@ public:
 
 private:
     bool intersectWith(const Ray& ray, Hit& hit, bool coherent) const;
+    /// Embree geometry id of instance 0 (the flat meshes, then the spheres, come first).
+    uint32_t instanceGeomBase() const { return geometry_.sphereGeomId() + 1; }
 
     const SceneGeometry& geometry_;
     void* device_ = nullptr;  // RTCDevice, kept opaque so embree headers stay out of this header
     void* scene_ = nullptr;   // RTCScene
+    std::vector<void*> prototypeScenes_;  // RTCScene per prototype (null where no instance uses it)
     Bounds3f bounds_;
     AccelStats stats_;
 };

@@ -19,6 +19,7 @@
 #include "accel/kdtree_accel.h"
 #include "app/commands.h"
 #include "core/error.h"
+#include "geometry/instances.h"
 #include "scene/scene_loader.h"
 #include "validation/ray_sets.h"
 
@@ -155,8 +156,19 @@ struct BenchOptions {
     std::string accels = "bvh,embree", rays = "primary,diffuse,shadow";
     int threads = 1, repeat = 5, resolution = 1024;
     uint64_t seed = 1;
-    bool json = false, complexity = false;
+    bool json = false, complexity = false, flattened = false;
 };
+
+/// Bytes of the scene's own geometry data (vertices, attributes, indices, instance records): what
+/// instancing saves beside the structures.
+size_t geometryBytes(const SceneGeometry& g) {
+    size_t b = g.spheres.size() * sizeof(Sphere) + g.instances.size() * sizeof(MeshInstance);
+    for (const TriangleMesh& m : g.meshes)
+        b += m.positions.size() * sizeof(Vec3f) + m.normals.size() * sizeof(Vec3f) + m.triangles.size() * sizeof(glm::uvec3) +
+             (m.texcoords[0].size() + m.texcoords[1].size()) * sizeof(Vec2f) + m.tangents.size() * sizeof(Vec4f);
+    for (const SceneGeometry& p : g.prototypes) b += geometryBytes(p);
+    return b;
+}
 
 /// One structure's measurements on one input: every repeat's build time and rays/s per ray kind.
 struct Measured {
@@ -164,6 +176,8 @@ struct Measured {
     std::map<std::string, std::vector<double>> mrays;
     AccelStats stats;
     nlohmann::json kdStats;
+    size_t geometryBytes = 0;
+    bool instanced = false, flattened = false;
 };
 
 /// The JSON entry of one structure, with its text line printed unless `json`; `embree` points to
@@ -171,12 +185,16 @@ struct Measured {
 nlohmann::json structureReport(const std::string& name, const std::vector<std::string>& kinds, const Measured& m,
                                const Measured* embree, size_t primitives, bool json) {
     nlohmann::json s = {{"buildSeconds", median(m.buildSeconds)},
-                        {"bytesPerPrimitive", primitives ? double(m.stats.memoryBytes) / double(primitives) : 0.0}};
+                        {"bytesPerPrimitive", primitives ? double(m.stats.memoryBytes) / double(primitives) : 0.0},
+                        {"memoryBytes", m.stats.memoryBytes}, {"geometryBytes", m.geometryBytes}};
     std::ostringstream line;
     line << std::fixed << std::setprecision(3) << "  " << std::setw(8) << std::left << name << " build "
          << median(m.buildSeconds) << " s";
     if (embree) line << " (" << median(m.buildSeconds) / median(embree->buildSeconds) << "x embree)";
     line << std::setprecision(1) << ", " << s["bytesPerPrimitive"].get<double>() << " B/prim";
+    if (m.instanced || m.flattened)
+        line << " (structure " << double(m.stats.memoryBytes) / 1048576.0 << " MiB + geometry " << double(m.geometryBytes) / 1048576.0
+             << " MiB)";
     for (const std::string& kind : kinds) {
         double mr = median(m.mrays.at(kind));
         s["mraysPerSecond"][kind] = mr;
@@ -207,12 +225,28 @@ nlohmann::json benchInput(const std::string& input, const std::vector<std::strin
         auto oracle = createAccel("embree", g, options);
         rays = makeRays(g, *oracle, camera, opt.resolution, opt.seed);
     }
+    // Instanced input with --flattened: every structure also over the flattened copy (a world-space
+    // copy of each instance), on the same rays, as "NAME-flat": memory and speed of the two.
+    struct Run {
+        std::string label, structure;
+        const SceneGeometry* geometry;
+    };
+    std::vector<Run> runs;
+    for (const std::string& name : accels) runs.push_back({name, name, &g});
+    SceneGeometry flat;
+    if (opt.flattened && !g.instances.empty()) {
+        flat = InstanceFlattening(g).flatten();
+        for (const std::string& name : accels) runs.push_back({name + "-flat", name, &flat});
+    }
     std::map<std::string, Measured> measured;
     size_t checksum = 0;
     for (int rep = 0; rep < opt.repeat; ++rep) {
-        for (const std::string& name : accels) {  // interleaved: each repeat runs every structure
-            auto accel = createAccel(name, g, options);
-            Measured& m = measured[name];
+        for (const Run& run : runs) {  // interleaved: each repeat runs every structure
+            auto accel = createAccel(run.structure, *run.geometry, options);
+            Measured& m = measured[run.label];
+            m.geometryBytes = geometryBytes(*run.geometry);
+            m.instanced = !run.geometry->instances.empty();
+            m.flattened = run.geometry == &flat;
             m.stats = accel->stats();
             m.kdStats = kdStatsJson(*accel);
             m.buildSeconds.push_back(accel->stats().buildSeconds);
@@ -224,15 +258,21 @@ nlohmann::json benchInput(const std::string& input, const std::vector<std::strin
             }
         }
     }
-    nlohmann::json entry = {{"input", input}, {"primitives", g.primitiveCount()},
+    const size_t primitives = g.primitiveCount() + g.instancedPrimitiveCount();
+    nlohmann::json entry = {{"input", input}, {"primitives", primitives}, {"instances", g.instances.size()},
+                            {"prototypes", g.prototypes.size()},
                             {"rays", {{"primary", rays.primary.size()}, {"diffuse", rays.diffuse.size()}, {"shadow", rays.shadow.size()}}},
                             {"structures", nlohmann::json::object()}};
     if (!opt.json)
-        std::cout << input << ": " << g.primitiveCount() << " primitives; rays primary " << rays.primary.size()
+        std::cout << input << ": " << primitives << " primitives"
+                  << (g.instances.empty() ? std::string()
+                                          : " (" + std::to_string(g.instances.size()) + " instances of " + std::to_string(g.prototypes.size()) +
+                                                " prototypes, " + std::to_string(g.primitiveCount()) + " flat)")
+                  << "; rays primary " << rays.primary.size()
                   << ", diffuse " << rays.diffuse.size() << ", shadow " << rays.shadow.size() << "\n";
     const Measured* embree = measured.count("embree") ? &measured.at("embree") : nullptr;
-    for (const std::string& name : accels)
-        entry["structures"][name] = structureReport(name, kinds, measured.at(name), embree, g.primitiveCount(), opt.json);
+    for (const Run& run : runs)
+        entry["structures"][run.label] = structureReport(run.label, kinds, measured.at(run.label), embree, primitives, opt.json);
     entry["checksum"] = checksum;
     for (const std::string& w : warnings) printWarning(w);
     return entry;
@@ -251,6 +291,8 @@ Runner addBenchAccelCommand(CLI::App& app) {
     cmd->add_option("--resolution", opt->resolution, "primary rays: a square image of this many pixels a side")->capture_default_str();
     cmd->add_option("--seed", opt->seed, "seed of the ray sets")->capture_default_str();
     cmd->add_flag("--json", opt->json, "print one JSON object instead of text");
+    cmd->add_flag("--flattened", opt->flattened,
+                  "instanced scenes: also every structure over the flattened copy (NAME-flat), for memory and speed");
     cmd->add_flag("--complexity", opt->complexity, "build times only, with build time / (N log2 N) per input");
     return [opt] {
         std::vector<std::string> accels = splitList(opt->accels), kinds = splitList(opt->rays);

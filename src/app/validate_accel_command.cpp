@@ -6,6 +6,7 @@
 #include <chrono>
 #include <iostream>
 
+#include "validation/instanced_scenes.h"
 #include "validation/validate.h"
 #include "app/commands.h"
 #include "scene/scene_loader.h"
@@ -44,15 +45,41 @@ Runner addValidateAccelCommand(CLI::App& app) {
 
         auto test = createAccel(opt->accel, geometry);
         auto reference = createAccel("embree", geometry);
-        ValidationResult total;
+        // Instanced scenes: records are compared in the flattened copy's numbering (instanced_scenes.h),
+        // against Embree's instanced scene and against Embree over the flattened copy.
+        const bool instanced = !geometry.instances.empty();
+        InstanceFlattening flattening(geometry);
+        SceneGeometry flat = instanced ? flattening.flatten() : SceneGeometry{};
+        const SceneGeometry& compared = instanced ? flat : geometry;
+        std::unique_ptr<Accel> flatReference = instanced ? createAccel("embree", flat) : nullptr;
+        FlattenedIds testIds(*test, flattening), referenceIds(*reference, flattening);
+        const Accel& testSeen = instanced ? static_cast<const Accel&>(testIds) : *test;
+        const Accel& referenceSeen = instanced ? static_cast<const Accel&>(referenceIds) : *reference;
+        ValidationResult total, totalFlat;
         nlohmann::json perKind = nlohmann::json::object();
         auto start = std::chrono::steady_clock::now();
         for (size_t k = 0; k < kinds.size(); ++k) {
             size_t n = opt->rays / kinds.size() + (k < opt->rays % kinds.size() ? 1 : 0);
-            std::vector<Ray> rays = generateRays(geometry, *reference, kinds[k], n, opt->seed, camera);
-            ValidationResult r = compareAccels(*test, *reference, geometry, rays, kinds[k]);
+            std::vector<Ray> rays = generateRays(compared, referenceSeen, kinds[k], n, opt->seed, camera);
+            ValidationResult r = compareAccels(testSeen, referenceSeen, compared, rays, kinds[k]);
             perKind[std::string(toString(kinds[k]))] = {{"rays", r.rays}, {"agreements", r.agreements}, {"ties", r.ties}, {"errors", r.errors}};
             total.merge(r, 20);
+            if (instanced) {
+                ValidationResult f = compareAccels(testSeen, *flatReference, compared, rays, kinds[k]);
+                perKind[std::string(toString(kinds[k])) + " (vs flattened)"] = {
+                    {"rays", f.rays}, {"agreements", f.agreements}, {"ties", f.ties}, {"errors", f.errors}};
+                totalFlat.merge(f, 20);
+            }
+        }
+        if (instanced && !opt->json) {
+            std::cout << "instanced scene: " << geometry.instances.size() << " instances of " << geometry.prototypes.size()
+                      << " prototype(s); compared against embree (instanced) and embree over the flattened copy ("
+                      << flat.primitiveCount() << " primitives): " << totalFlat.errors << " errors against the flattened copy\n";
+        }
+        if (instanced) {
+            total.errors += totalFlat.errors;
+            for (const ValidationExample& e : totalFlat.examples)
+                if (total.examples.size() < 20) total.examples.push_back(e);
         }
         double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (opt->json) {
@@ -60,14 +87,16 @@ Runner addValidateAccelCommand(CLI::App& app) {
             j["input"] = opt->input;
             j["accel"] = opt->accel;
             j["reference"] = "embree";
-            j["primitives"] = geometry.primitiveCount();
+            j["primitives"] = geometry.primitiveCount() + geometry.instancedPrimitiveCount();
             j["alpha_masked_meshes"] = maskedMeshes;
             j["seed"] = opt->seed;
             j["kinds"] = perKind;
+            j["instances"] = geometry.instances.size();
+            j["errors_vs_flattened"] = totalFlat.errors;
             j["seconds"] = seconds;
             std::cout << j.dump(2) << std::endl;
         } else {
-            std::cout << opt->accel << " vs embree on " << opt->input << " (" << geometry.primitiveCount()
+            std::cout << opt->accel << " vs embree on " << opt->input << " (" << geometry.primitiveCount() + geometry.instancedPrimitiveCount()
                       << " primitives, " << maskedMeshes << " alpha-masked meshes, seed " << opt->seed << ")\n";
             for (auto& [name, v] : perKind.items())
                 std::cout << "  " << name << ": " << v["rays"] << " rays, " << v["agreements"] << " agree, " << v["ties"]

@@ -1,5 +1,7 @@
 #include "geometry/shapes.h"
 
+#include "geometry/instances.h"
+
 namespace tessera {
 
 size_t SceneGeometry::primitiveCount() const {
@@ -8,11 +10,22 @@ size_t SceneGeometry::primitiveCount() const {
     return n;
 }
 
+size_t SceneGeometry::instancedPrimitiveCount() const {
+    size_t n = 0;
+    for (const MeshInstance& inst : instances) n += prototypes[inst.prototype].primitiveCount();
+    return n;
+}
+
 Bounds3f SceneGeometry::bounds() const {
     Bounds3f b;
     for (const TriangleMesh& m : meshes)
         for (const Vec3f& p : m.positions) b.extend(p);
     for (const Sphere& s : spheres) b.extend(sphereBounds(s));
+    if (!instances.empty()) {
+        std::vector<Bounds3f> objectBounds;
+        for (const SceneGeometry& proto : prototypes) objectBounds.push_back(proto.bounds());
+        for (const MeshInstance& inst : instances) b.extend(instanceWorldBounds(inst, objectBounds[inst.prototype]));
+    }
     return b;
 }
 

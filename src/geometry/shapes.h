@@ -44,19 +44,41 @@ struct Sphere {
     uint32_t materialId = 0;
 };
 
+/// One placement of a prototype (SceneGeometry::prototypes): object-to-world affine transform and
+/// its inverse (computed in double precision, then rounded; geometry/instances.h builds them).
+struct MeshInstance {
+    uint32_t prototype = 0;
+    Mat4f objectToWorld{1.f};
+    Mat4f worldToObject{1.f};
+};
+
 /// Everything an acceleration structure sees. Geometry ids: mesh i has geomId i; all spheres together
 /// form geometry `meshes.size()` with primId = sphere index (this is also how Embree numbers them).
+/// Instanced meshes (two-level structures): `prototypes` hold object-space meshes stored once (no
+/// spheres, no nested instances), `instances` place them; a hit on one carries instId = the
+/// instance's index and geomId/primId of the prototype's mesh and triangle (geometry/hit.h).
 struct SceneGeometry {
     std::vector<TriangleMesh> meshes;
     std::vector<Sphere> spheres;
+    std::vector<SceneGeometry> prototypes;
+    std::vector<MeshInstance> instances;
     /// The decoded images the meshes' alpha masks point into, for geometry that outlives the Scene
     /// that loaded it (loadGeometryFile: validate-accel, bench-accel, the API's geometry loads).
     /// Null inside a Scene, which owns its images itself.
     std::shared_ptr<const std::vector<std::unique_ptr<Image>>> maskImages;
 
     uint32_t sphereGeomId() const { return uint32_t(meshes.size()); }
+    /// Primitives of the flat geometry (meshes and spheres) that one structure over it holds.
     size_t primitiveCount() const;
+    /// Triangles the instances place, counted once per instance (what flattening would store).
+    size_t instancedPrimitiveCount() const;
+    /// The box of everything, instances included (each by its prototype's box transformed).
     Bounds3f bounds() const;
+    /// The mesh of a hit with ids (geomId, instId) as in Hit; null for a sphere.
+    const TriangleMesh* meshOf(uint32_t geomId, uint32_t instId) const {
+        if (instId != kInvalidId) return &prototypes[instances[instId].prototype].meshes[geomId];
+        return geomId < meshes.size() ? &meshes[geomId] : nullptr;
+    }
 };
 
 inline Bounds3f sphereBounds(const Sphere& s) {

@@ -63,7 +63,7 @@ public:
 private:
     uint32_t materialOf(const Hit& h) const {
         const SceneGeometry& g = scene_.geometry;
-        if (h.geomId < g.meshes.size()) return g.meshes[h.geomId].materialId;
+        if (const TriangleMesh* mesh = g.meshOf(h.geomId, h.instId)) return mesh->materialId;
         if (h.geomId == g.sphereGeomId() && h.primId < g.spheres.size()) return g.spheres[h.primId].materialId;
         return kInvalidId;
     }

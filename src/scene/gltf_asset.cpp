@@ -41,6 +41,15 @@ void appendAssetScene(Scene& into, Scene&& asset) {
         mesh.materialId += base;
         into.geometry.meshes.push_back(std::move(mesh));
     }
+    const auto prototypeBase = uint32_t(into.geometry.prototypes.size());
+    for (SceneGeometry& proto : asset.geometry.prototypes) {
+        for (TriangleMesh& mesh : proto.meshes) mesh.materialId += base;
+        into.geometry.prototypes.push_back(std::move(proto));
+    }
+    for (MeshInstance inst : asset.geometry.instances) {
+        inst.prototype += prototypeBase;
+        into.geometry.instances.push_back(inst);
+    }
     for (Sphere& sphere : asset.geometry.spheres) {
         sphere.materialId += base;
         into.geometry.spheres.push_back(std::move(sphere));

@@ -6,13 +6,17 @@
 #include <fstream>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
+#include <map>
 #include <set>
 
 #include "core/error.h"
 #include "materials/bsdf.h"
+#include "geometry/instances.h"
 #include "scene/gltf_asset.h"
 #include "scene/gltf_extensions.h"
 #include "scene/gltf_files.h"
+#include "scene/gltf_lights.h"
+#include "scene/gltf_components.h"
 #include "scene/gltf_textures.h"
 #include "scene/mesh_loader.h"
 #include "scene/tangents.h"
@@ -28,33 +32,6 @@ std::string idx(const char* array, size_t i) { return std::string(array) + "[" +
 constexpr std::initializer_list<int> kFloatOrQuantized = {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE,
                                                           TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_SHORT,
                                                           TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT};
-
-/// One integer accessor component (unaligned bytes, little endian) as a float. Normalized integers
-/// map as glTF 2.0 §3.11 defines: f = max(c / 127, −1), c / 255, max(c / 32767, −1), c / 65535.
-float componentAsFloat(const unsigned char* p, int componentType, bool normalized) {
-    switch (componentType) {
-        case TINYGLTF_COMPONENT_TYPE_BYTE: {
-            auto c = float(int8_t(p[0]));
-            return normalized ? std::max(c / 127.f, -1.f) : c;
-        }
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? float(p[0]) / 255.f : float(p[0]);
-        case TINYGLTF_COMPONENT_TYPE_SHORT: {
-            int16_t c;
-            std::memcpy(&c, p, 2);
-            return normalized ? std::max(float(c) / 32767.f, -1.f) : float(c);
-        }
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
-            uint16_t c;
-            std::memcpy(&c, p, 2);
-            return normalized ? float(c) / 65535.f : float(c);
-        }
-        default: {
-            float f;
-            std::memcpy(&f, p, 4);
-            return f;
-        }
-    }
-}
 
 /// How deep TESSERA_asset_gltf assets may name further assets (a cycle of assets stops here).
 constexpr int kMaxAssetNesting = 8;
@@ -84,7 +61,7 @@ public:
         scene_.sourcePath = path_;
         if (nesting_ == 0) {
             readRenderSettings();
-            readEnvironment();  // an imported asset's own environment is not the scene's
+            readGltfEnvironment(model_, values_, options_, *assetBytes_, scene_);  // an imported asset's own environment is not the scene's
         }
         readMaterials();
         traverseScene();
@@ -171,29 +148,13 @@ private:
         ignored(!model_.animations.empty(), "animations are ignored: nodes are rendered in their static transforms");
     }
 
-    /// An optional RGB array member with components in [0, maxComponent].
     Rgb color3(const gl::Value& obj, const char* key, const std::string& element, Rgb fallback, double maxComponent) const {
-        if (!obj.IsObject() || !obj.Has(key)) return fallback;
-        const gl::Value& a = obj.Get(key);
-        if (!a.IsArray() || a.ArrayLen() != 3) fail(element, std::string(key) + " must be an array of 3 numbers");
-        Rgb c;
-        for (int i = 0; i < 3; ++i) {
-            const gl::Value& x = a.Get(i);
-            double d = x.IsNumber() ? x.GetNumberAsDouble() : -1.0;
-            if (!(d >= 0.0 && d <= maxComponent)) fail(element, std::string(key) + " components must be in [0, " + (maxComponent > 1e29 ? "inf" : "1") + ")");
-            c[i] = float(d);
-        }
-        return c;
+        return values_.color3(obj, key, element, fallback, maxComponent);
+    }
+    double number(const gl::Value& obj, const char* key, const std::string& element, double fallback) const {
+        return values_.number(obj, key, element, fallback);
     }
 
-    double number(const gl::Value& obj, const char* key, const std::string& element, double fallback) const {
-        if (!obj.Has(key)) return fallback;
-        const gl::Value& v = obj.Get(key);
-        if (!v.IsNumber()) fail(element, std::string("'") + key + "' must be a number");
-        double d = v.GetNumberAsDouble();
-        if (!std::isfinite(d)) fail(element, std::string("'") + key + "' must be finite");
-        return d;
-    }
 
     void readRenderSettings() {
         auto it = model_.extensions.find("TESSERA_render");
@@ -352,6 +313,7 @@ private:
             for (size_t i = 0; i < model_.nodes.size(); ++i)
                 if (!isChild[i]) roots.push_back(int(i));
         }
+        countReferences();
         for (int r : roots) visitNode(r, root_, 0);
     }
 
@@ -367,7 +329,7 @@ private:
         if (node.mesh >= 0) readMesh(node.mesh, world, el);
         if (node.camera >= 0) readCamera(node.camera, world, el, node.name);
         if (auto it = node.extensions.find("KHR_lights_punctual"); it != node.extensions.end())
-            readPunctualLight(it->second, world, el + ".extensions.KHR_lights_punctual");
+            readGltfPunctualLight(model_, values_, it->second, world, el + ".extensions.KHR_lights_punctual", scene_, warnings_);
         if (auto it = node.extensions.find("TESSERA_sphere"); it != node.extensions.end())
             readSphere(it->second, world, el + ".extensions.TESSERA_sphere");
         if (auto it = node.extensions.find("TESSERA_asset_mesh"); it != node.extensions.end())
@@ -420,105 +382,6 @@ private:
         return d;
     }
 
-    /// KHR_lights_punctual point, spot and directional lights. glTF gives point and spot intensities
-    /// in candela (lm/sr), directional ones in lux (lm/m²), and emission in nits (cd/m²); Tessera
-    /// reads emissive values as radiance 1:1, so for the same scale it reads candela as radiant
-    /// intensity (W/sr) and lux as irradiance (W/m²) 1:1: I = intensity · color, E = intensity ·
-    /// color. Spot and directional lights shine along the node's local −Z. `range` is ignored
-    /// (physically based inverse-square falloff, as the extension recommends).
-    void readPunctualLight(const gl::Value& v, const Mat4d& world, const std::string& el) {
-        if (!v.IsObject() || !v.Has("light") || !v.Get("light").IsNumber()) fail(el, "needs a 'light' index");
-        double index = v.Get("light").GetNumberAsDouble();
-        if (!(index >= 0 && index < double(model_.lights.size())) || index != std::floor(index))
-            fail(el, "'light' must index extensions.KHR_lights_punctual.lights[]");
-        const gl::Light& gl = model_.lights[size_t(index)];
-        const std::string lel = idx("KHR_lights_punctual.lights", size_t(index));
-        if (gl.type != "point" && gl.type != "spot" && gl.type != "directional") {
-            warnings_.push_back(path_ + ": " + lel + ": light type '" + gl.type + "' is not supported and is ignored");
-            return;
-        }
-        if (!(gl.intensity >= 0.0) || !std::isfinite(gl.intensity)) fail(lel, "intensity must be finite and non-negative");
-        Rgb color(1.f);
-        if (!gl.color.empty()) {
-            if (gl.color.size() != 3) fail(lel, "color must have 3 components");
-            for (int c = 0; c < 3; ++c) {
-                if (!(gl.color[size_t(c)] >= 0.0 && gl.color[size_t(c)] <= 1.0)) fail(lel, "color components must be in [0, 1]");
-                color[c] = float(gl.color[size_t(c)]);
-            }
-        }
-        Rgb value = color * float(gl.intensity);
-        if (isBlack(value)) return;
-        Vec3f position = Vec3f(Vec3d(world[3]));
-        if (!isFinite(position)) fail(el, "light position is not finite");
-        Vec3d axis = -Vec3d(world[2]);  // the node's −Z in world space
-        double axisLength = glm::length(axis);
-        if (gl.type != "point" && !(axisLength > 0.0 && std::isfinite(axisLength))) fail(el, "light direction is degenerate");
-        Vec3f direction = Vec3f(axis / axisLength);
-        if (gl.type == "point") {
-            scene_.pointLights.push_back(PointLightDesc{position, value});
-        } else if (gl.type == "spot") {
-            double inner = gl.spot.innerConeAngle, outer = gl.spot.outerConeAngle;
-            // The extension: 0 ≤ innerConeAngle < outerConeAngle ≤ π/2.
-            if (!(inner >= 0.0 && inner < outer && outer <= 0.5 * kPi + 1e-6))
-                fail(lel, "spot cone angles must satisfy 0 <= innerConeAngle < outerConeAngle <= pi/2");
-            scene_.spotLights.push_back(SpotLightDesc{position, direction, value, float(inner), float(std::min(outer, 0.5 * kPi))});
-        } else {
-            scene_.directionalLights.push_back(DirectionalLightDesc{direction, value});
-        }
-    }
-
-    /// TESSERA_environment at the glTF root: {"color": [r, g, b], "intensity": s, "rotation": degrees,
-    /// and optionally "image": "file.exr" (a relative URI, confined to the scene's folder like
-    /// buffers) or "asset": "name" (looked up in the asset folders like TESSERA_asset_mesh)}. The
-    /// radiance is color × intensity (× the image, linear, equirectangular: scene/environment.h).
-    void readEnvironment() {
-        auto it = model_.extensions.find("TESSERA_environment");
-        if (it == model_.extensions.end()) return;
-        const gl::Value& v = it->second;
-        const std::string el = "extensions.TESSERA_environment";
-        if (!v.IsObject()) fail(el, "must be an object");
-        EnvironmentDesc env;
-        env.color = color3(v, "color", el, Rgb(1.f), 1e30);
-        double intensity = number(v, "intensity", el, 1.0);
-        if (!(intensity >= 0.0 && intensity <= 1e30)) fail(el, "'intensity' must be a non-negative number");
-        env.intensity = float(intensity);
-        env.rotationDeg = float(number(v, "rotation", el, 0.0));
-        env.source = "constant";
-        if (v.Has("image") && v.Has("asset")) fail(el, "give either 'image' or 'asset', not both");
-        std::string file;
-        if (v.Has("image")) {
-            if (!v.Get("image").IsString()) fail(el, "'image' must be a string (a file relative to the scene)");
-            std::string uri = v.Get("image").Get<std::string>();
-            std::error_code ec;
-            std::filesystem::path folder = std::filesystem::weakly_canonical(std::filesystem::absolute(path_), ec).parent_path();
-            file = (folder / uri).string();
-            GltfFileAccess access;  // the confinement buffers and images have (scene/gltf_files.h)
-            access.root = folder;
-            access.options = options_;
-            if (!access.allowed(file)) fail(el, access.violation.empty() ? "cannot resolve '" + uri + "'" : access.violation);
-            if (!std::filesystem::is_regular_file(file, ec)) fail(el, "image '" + uri + "' not found");
-            uint64_t size = std::filesystem::file_size(file, ec);
-            if (ec || size > options_.maxFileBytes) fail(el, "'" + uri + "' is unreadable or over the file-size limit");
-        } else if (v.Has("asset")) {
-            if (!v.Get("asset").IsString()) fail(el, "'asset' must be a string");
-            std::string name = v.Get("asset").Get<std::string>();
-            // The one asset resolution (name rules, folders, the scene's running byte total).
-            file = resolveAssetOrThrow(name, options_.assetRoots, options_.maxFileBytes, *assetBytes_, path_, el);
-            env.source = "asset " + name;
-        }
-        if (!file.empty()) {
-            std::unique_ptr<Image> image;
-            try {
-                image = readEnvironmentImage(file);
-            } catch (const InputError& e) {
-                fail(el, e.what());
-            }
-            scene_.images.push_back(std::move(image));
-            env.image = scene_.images.back().get();
-            if (env.source == "constant") env.source = v.Get("image").Get<std::string>();  // as the scene names it
-        }
-        scene_.environment = env;
-    }
 
     void readSphere(const gl::Value& v, const Mat4d& world, const std::string& el) {
         if (!v.IsObject()) fail(el, "must be an object");
@@ -556,6 +419,12 @@ private:
                 fail(el, "'material' must index materials[]");
             materialId = uint32_t(mat);
         }
+        // Named by several nodes: read (and its bytes counted) once, then instanced; an emissive
+        // one stays flat per node, as lights are world-space triangles.
+        const bool instanced = options_.instanceMeshes && assetUses_[name] >= 2 && !scene_.materials[materialId].isEmissive();
+        const std::string key = name + "#" + std::to_string(materialId);
+        if (instanced)
+            if (auto it = assetPrototype_.find(key); it != assetPrototype_.end()) return placeInstance(it->second, world);
         const std::string file = resolveAssetOrThrow(name, options_.assetRoots, options_.maxFileBytes, *assetBytes_, path_, el);
         std::string lower = name;
         for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -570,8 +439,10 @@ private:
         mesh.name = name + " (" + el + ")";
         mesh.materialId = materialId;
         mesh.normals.clear();  // flat shading: the loaders' normals (if any) are not transformed here
-        bool flipWinding = glm::determinant(Mat4d(world)) < 0.0;
-        for (Vec3f& p : mesh.positions) p = Vec3f(world * glm::dvec4(Vec3d(p), 1.0));
+        const Mat4d placement = instanced ? Mat4d(1.0) : world;  // a prototype stays in object space
+        bool flipWinding = glm::determinant(Mat4d(placement)) < 0.0;
+        if (!instanced)
+            for (Vec3f& p : mesh.positions) p = Vec3f(world * glm::dvec4(Vec3d(p), 1.0));
         std::vector<glm::uvec3> kept;
         kept.reserve(mesh.triangles.size());
         for (glm::uvec3 t : mesh.triangles) {
@@ -581,6 +452,14 @@ private:
         }
         if (kept.empty()) fail(el, "asset '" + name + "' has no usable triangles");
         mesh.triangles = std::move(kept);
+        if (instanced) {
+            std::vector<TriangleMesh> objectSpace;
+            objectSpace.push_back(std::move(mesh));
+            uint32_t prototype = addPrototype(std::move(objectSpace));
+            assetPrototype_[key] = prototype;
+            placeInstance(prototype, world);
+            return;
+        }
         scene_.geometry.meshes.push_back(std::move(mesh));
     }
 
@@ -674,8 +553,61 @@ private:
         return out;
     }
 
+    /// How many nodes name each mesh and each TESSERA_asset_mesh asset: what is named twice or more
+    /// is instanced (when options_.instanceMeshes).
+    void countReferences() {
+        meshUses_.assign(model_.meshes.size(), 0);
+        for (const gl::Node& n : model_.nodes) {
+            if (n.mesh >= 0 && size_t(n.mesh) < meshUses_.size()) ++meshUses_[size_t(n.mesh)];
+            auto it = n.extensions.find("TESSERA_asset_mesh");
+            if (it != n.extensions.end() && it->second.IsObject() && it->second.Has("asset") && it->second.Get("asset").IsString())
+                ++assetUses_[it->second.Get("asset").Get<std::string>()];
+        }
+    }
+
+    /// A new prototype holding `meshes` (object space); kInvalidId when there are none.
+    uint32_t addPrototype(std::vector<TriangleMesh>&& meshes) {
+        if (meshes.empty()) return kInvalidId;
+        SceneGeometry proto;
+        proto.meshes = std::move(meshes);
+        scene_.geometry.prototypes.push_back(std::move(proto));
+        return uint32_t(scene_.geometry.prototypes.size() - 1);
+    }
+
+    /// An instance of `prototype` at `world`; a singular transform places nothing (its triangles
+    /// count as dropped degenerate ones, as a flattened copy's would be).
+    void placeInstance(uint32_t prototype, const Mat4d& world) {
+        if (prototype == kInvalidId) return;
+        MeshInstance inst;
+        if (makeMeshInstance(prototype, world, inst)) scene_.geometry.instances.push_back(inst);
+        else droppedTriangles_ += scene_.geometry.prototypes[prototype].primitiveCount();
+    }
+
+    /// Mesh `meshIndex` placed at `world`. Named by one node (or with instancing off): its primitives
+    /// in world space, as flat meshes. Named by several: its primitives are read once in object
+    /// space into a prototype that each node instances, except emissive ones, which stay flat per
+    /// node so that lights remain world-space triangles (scene/lights.h).
     void readMesh(int meshIndex, const Mat4d& world, const std::string& nodeEl) {
         if (size_t(meshIndex) >= model_.meshes.size()) fail(nodeEl, "mesh index out of range");
+        if (!options_.instanceMeshes || meshUses_[size_t(meshIndex)] < 2) {
+            readPrimitives(meshIndex, world, Primitives::kAll, scene_.geometry.meshes);
+            return;
+        }
+        auto [it, fresh] = meshPrototype_.try_emplace(meshIndex, kInvalidId);
+        if (fresh) {
+            std::vector<TriangleMesh> objectSpace;
+            readPrimitives(meshIndex, Mat4d(1.0), Primitives::kNonEmissive, objectSpace);
+            it->second = addPrototype(std::move(objectSpace));
+        }
+        placeInstance(it->second, world);
+        readPrimitives(meshIndex, world, Primitives::kEmissive, scene_.geometry.meshes);
+    }
+
+    enum class Primitives { kAll, kNonEmissive, kEmissive };
+
+    /// The triangle primitives of mesh `meshIndex` that `which` selects, transformed by `world`,
+    /// appended to `out`.
+    void readPrimitives(int meshIndex, const Mat4d& world, Primitives which, std::vector<TriangleMesh>& out) {
         const gl::Mesh& gm = model_.meshes[size_t(meshIndex)];
         // A mirroring transform reverses the winding (glTF 2.0 spec, 3.7.4): flip it back so front
         // faces, and so one-sided emitters, keep facing the way the artist meant (pbrt-v3 #229).
@@ -713,6 +645,8 @@ private:
                     fail(el, "index " + std::to_string(i) + " out of range (" + std::to_string(mesh.positions.size()) + " vertices)");
             if (prim.material >= 0 && size_t(prim.material) >= model_.materials.size()) fail(el, "material index out of range");
             mesh.materialId = prim.material >= 0 ? uint32_t(prim.material) : defaultMaterial_;
+            bool emissive = scene_.materials[mesh.materialId].isEmissive();
+            if ((which == Primitives::kNonEmissive && emissive) || (which == Primitives::kEmissive && !emissive)) continue;
             mesh.triangles = assembleTriangles(indices, mode, el);
             readTextureAttributes(prim, mesh, el);
             std::vector<glm::uvec3> tris = std::move(mesh.triangles);
@@ -742,7 +676,7 @@ private:
                 if (scene_.materials[mesh.materialId].isEmissive()) fail(el, "emitter has zero area");
                 fail(el, "all " + std::to_string(tris.size()) + " triangle(s) are degenerate or have non-finite vertices");
             }
-            scene_.geometry.meshes.push_back(std::move(mesh));
+            out.push_back(std::move(mesh));
         }
     }
 
@@ -815,12 +749,17 @@ private:
     int nesting_ = 0;
     uint64_t ownAssetBytes_ = 0;
     uint64_t* assetBytes_;  ///< bytes of asset files read by the whole scene load (nested loaders share it)
+    GltfValues values_{path_};
     GltfFileAccess access_;
     gl::Model model_;
     std::vector<std::shared_ptr<const AlphaMask>> alphaMasks_;  ///< per material (null: opaque)
     Scene scene_;
     uint32_t defaultMaterial_ = 0;
     std::set<int> visited_;
+    std::vector<int> meshUses_;                    ///< nodes naming each mesh
+    std::map<std::string, int> assetUses_;         ///< nodes naming each TESSERA_asset_mesh asset
+    std::map<int, uint32_t> meshPrototype_;        ///< instanced mesh → its prototype (kInvalidId: none)
+    std::map<std::string, uint32_t> assetPrototype_;  ///< "asset#material" → its prototype
     size_t droppedTriangles_ = 0;
 
     /// False (and counted in the warning) for a triangle of zero area or with a non-finite vertex or

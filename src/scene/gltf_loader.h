@@ -45,6 +45,11 @@ struct SceneLoadOptions {
     /// Folders where TESSERA_asset_mesh and TESSERA_asset_gltf names are looked up (never the scene's
     /// own URIs).
     std::vector<std::string> assetRoots = defaultAssetRoots();
+    /// A glTF mesh named by several nodes (or a TESSERA_asset_mesh asset named by several) is stored
+    /// once, in object space, as a prototype that each node places as an instance
+    /// (SceneGeometry::instances); emissive primitives stay flat. False: a world-space copy per
+    /// node (`--no-instancing`), what the benchmark compares against.
+    bool instanceMeshes = true;
 };
 
 /// The extensions this loader understands; any other entry of extensionsRequired is an error.

@@ -1,5 +1,6 @@
 #include "scene/scene.h"
 
+#include "geometry/instances.h"
 #include "geometry/intersect.h"
 #include "materials/bsdf.h"
 
@@ -43,13 +44,16 @@ Rgb unitRange(const Vec4f& c) { return Rgb(unitRange(c.r), unitRange(c.g), unitR
 /// texel-density term of ray-cone texture LOD (Akenine-Möller et al. 2019, "Texture Level of Detail
 /// Strategies for Real-Time Ray Tracing", Ray Tracing Gems ch. 20, eq. 20.4, without its
 /// resolution factor: sampleTexture applies the image's size).
-float uvPerWorld(const TriangleMesh& mesh, int set, uint32_t primId) {
+/// `inst`: the instance placing the mesh (null for a flat mesh), whose transform scales the area.
+float uvPerWorld(const TriangleMesh& mesh, const MeshInstance* inst, int set, uint32_t primId) {
     const glm::uvec3& t = mesh.triangles[primId];
     const std::vector<Vec2f>& uv = mesh.texcoords[set];
     if (uv.empty()) return 0.f;
     Vec2f a = uv[t.y] - uv[t.x], b = uv[t.z] - uv[t.x];
     float uvArea = std::abs(a.x * b.y - a.y * b.x);
-    float worldArea = glm::length(glm::cross(mesh.positions[t.y] - mesh.positions[t.x], mesh.positions[t.z] - mesh.positions[t.x]));
+    Vec3f p0 = mesh.positions[t.x], p1 = mesh.positions[t.y], p2 = mesh.positions[t.z];
+    if (inst) p0 = instancePointToWorld(*inst, p0), p1 = instancePointToWorld(*inst, p1), p2 = instancePointToWorld(*inst, p2);
+    float worldArea = glm::length(glm::cross(p1 - p0, p2 - p0));
     float density = worldArea > 0.f ? std::sqrt(uvArea / worldArea) : 0.f;
     return std::isfinite(density) ? density : 0.f;
 }
@@ -58,9 +62,13 @@ float uvPerWorld(const TriangleMesh& mesh, int set, uint32_t primId) {
 /// tangent frame (T, B = w · (N × T), N) of the interpolated shading normal `n`. Normal maps are
 /// read at the finest MIP level: averaging normals shortens and flattens them, and pixel
 /// supersampling already filters the shading. Returns `n` where the frame is degenerate.
-Vec3f normalMapped(const TriangleMesh& mesh, const TextureRef& tex, float scale, uint32_t primId, float u, float v, const Vec3f& n) {
+/// `inst`: the instance placing the mesh (null for a flat mesh); its vertex tangents are taken to
+/// world space before they are interpolated, as a flattened copy's are.
+Vec3f normalMapped(const TriangleMesh& mesh, const MeshInstance* inst, const TextureRef& tex, float scale, uint32_t primId, float u,
+                   float v, const Vec3f& n) {
     const glm::uvec3& t = mesh.triangles[primId];
-    Vec4f t4 = (1.f - u - v) * mesh.tangents[t.x] + u * mesh.tangents[t.y] + v * mesh.tangents[t.z];
+    auto tangent4 = [&](uint32_t i) { return inst ? instanceTangentToWorld(*inst, mesh.tangents[i]) : mesh.tangents[i]; };
+    Vec4f t4 = (1.f - u - v) * tangent4(t.x) + u * tangent4(t.y) + v * tangent4(t.z);
     Vec3f tangent = Vec3f(t4) - glm::dot(n, Vec3f(t4)) * n;  // Gram–Schmidt against the interpolated normal
     float len2 = glm::dot(tangent, tangent);
     if (!(len2 > 1e-12f) || !std::isfinite(len2)) return n;
@@ -80,17 +88,25 @@ SurfaceInteraction Scene::interaction(const Ray& ray, const Hit& hit) const {
     SurfaceInteraction si;
     si.ng = hit.ng;
     si.geomId = hit.geomId;
+    si.instId = hit.instId;
     si.primId = hit.primId;
     si.bary = Vec2f(hit.u, hit.v);
-    if (hit.geomId < geometry.meshes.size()) {
-        const TriangleMesh& mesh = geometry.meshes[hit.geomId];
+    if (const TriangleMesh* meshPtr = geometry.meshOf(hit.geomId, hit.instId)) {
+        // An instance's mesh is in object space: the point and the normals are interpolated (and
+        // normal-mapped) there, then taken to world space; hit.ng is in world space already.
+        const MeshInstance* inst = hit.instId != kInvalidId ? &geometry.instances[hit.instId] : nullptr;
+        const TriangleMesh& mesh = *meshPtr;
         const glm::uvec3& t = mesh.triangles[hit.primId];
         float b0 = 1.f - hit.u - hit.v;
         si.p = b0 * mesh.positions[t.x] + hit.u * mesh.positions[t.y] + hit.v * mesh.positions[t.z];
+        if (inst) si.p = instancePointToWorld(*inst, si.p);
         si.materialId = mesh.materialId;
         si.ns = si.ng;
         if (!mesh.normals.empty()) {
-            Vec3f n = b0 * mesh.normals[t.x] + hit.u * mesh.normals[t.y] + hit.v * mesh.normals[t.z];
+            // An instance's vertex normals go to world space before they are interpolated, as a
+            // flattened copy's are, so both shade alike under non-uniform scale.
+            auto normal = [&](uint32_t i) { return inst ? instanceNormalToWorld(*inst, mesh.normals[i]) : mesh.normals[i]; };
+            Vec3f n = b0 * normal(t.x) + hit.u * normal(t.y) + hit.v * normal(t.z);
             float len2 = glm::dot(n, n);
             if (len2 > 0.f && std::isfinite(len2)) {
                 n /= std::sqrt(len2);
@@ -100,7 +116,7 @@ SurfaceInteraction Scene::interaction(const Ray& ray, const Hit& hit) const {
                 if (tex.normal.valid() && !mesh.tangents.empty()) {
                     // Mapped in the file's frame, then put on ng's side as the interpolated normal
                     // is; a mapped normal below the geometric surface keeps the interpolated one.
-                    Vec3f mapped = side * normalMapped(mesh, tex.normal, tex.normalScale, hit.primId, hit.u, hit.v, n);
+                    Vec3f mapped = side * normalMapped(mesh, inst, tex.normal, tex.normalScale, hit.primId, hit.u, hit.v, n);
                     if (glm::dot(mapped, si.ng) > 0.f) si.ns = mapped;
                 }
             }
@@ -111,16 +127,19 @@ SurfaceInteraction Scene::interaction(const Ray& ray, const Hit& hit) const {
         si.materialId = s.materialId;
         si.ns = si.ng;
     }
-    si.lightIndex = lights_.lightIndexOf(hit.geomId, hit.primId);
+    // Instanced meshes never emit: the loader keeps emissive meshes flat (per world triangle lights).
+    si.lightIndex = hit.instId == kInvalidId ? lights_.lightIndexOf(hit.geomId, hit.primId) : kInvalidId;
     return si;
 }
 
 BsdfParams Scene::bsdfParams(const SurfaceInteraction& si, float footprintW) const {
     const Material& m = materials[si.materialId];
-    if (!m.textures.any() || si.geomId >= geometry.meshes.size()) return m.bsdf;
-    const TriangleMesh& mesh = geometry.meshes[si.geomId];
+    const TriangleMesh* meshPtr = geometry.meshOf(si.geomId, si.instId);
+    if (!m.textures.any() || !meshPtr) return m.bsdf;
+    const TriangleMesh& mesh = *meshPtr;
+    const MeshInstance* inst = si.instId != kInvalidId ? &geometry.instances[si.instId] : nullptr;
     auto lookup = [&](const TextureRef& tex) {
-        float footprintUv = footprintW > 0.f ? footprintW * uvPerWorld(mesh, tex.texCoord, si.primId) : 0.f;
+        float footprintUv = footprintW > 0.f ? footprintW * uvPerWorld(mesh, inst, tex.texCoord, si.primId) : 0.f;
         return sampleTexture(tex, mesh.texcoordAt(tex.texCoord, si.primId, si.bary.x, si.bary.y), footprintUv);
     };
     // glTF 2.0 (3.9.2, and the KHR_materials_* texture definitions): each texture multiplies its factor.

@@ -34,6 +34,7 @@ struct SurfaceInteraction {
     uint32_t materialId = 0;
     uint32_t lightIndex = kInvalidId;
     uint32_t geomId = kInvalidId;  ///< the primitive hit (SceneGeometry numbering, as in Hit)
+    uint32_t instId = kInvalidId;  ///< the instance hit (SceneGeometry::instances), or kInvalidId
     uint32_t primId = kInvalidId;
     Vec2f bary{0.f};               ///< the hit's (u, v): barycentrics of vertices 1 and 2 (triangles)
 };

@@ -21,14 +21,18 @@ std::string lowerExtension(const std::string& path) {
 }  // namespace
 
 SceneGeometry loadGeometryFile(const std::string& path, std::optional<CameraDesc>& camera,
-                               std::vector<std::string>& warnings, const MeshLoadOptions& options) {
+                               std::vector<std::string>& warnings, const MeshLoadOptions& options, bool instanceMeshes) {
     std::string ext = lowerExtension(path);
     SceneGeometry g;
     if (ext == ".gltf" || ext == ".glb") {
-        Scene scene = loadGltfScene(path, warnings);
+        SceneLoadOptions sceneOptions;
+        sceneOptions.instanceMeshes = instanceMeshes;
+        Scene scene = loadGltfScene(path, warnings, sceneOptions);
         camera = scene.camera;
         g.meshes = std::move(scene.geometry.meshes);
         g.spheres = std::move(scene.geometry.spheres);
+        g.prototypes = std::move(scene.geometry.prototypes);
+        g.instances = std::move(scene.geometry.instances);
         // Alpha masks point into the scene's images: they move along (same addresses) and live as
         // long as the geometry.
         g.maskImages = std::make_shared<const std::vector<std::unique_ptr<Image>>>(std::move(scene.images));

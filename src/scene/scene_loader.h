@@ -15,8 +15,8 @@ namespace tessera {
 
 /// Geometry of a glTF scene (.gltf/.glb, with its camera when it has one), PLY (.ply, .ply.gz) or
 /// OBJ file, chosen by extension. Non-fatal problems go to `warnings`. Throws InputError for any
-/// other extension.
+/// other extension. `instanceMeshes`: SceneLoadOptions::instanceMeshes for glTF scenes.
 SceneGeometry loadGeometryFile(const std::string& path, std::optional<CameraDesc>& camera,
-                               std::vector<std::string>& warnings, const MeshLoadOptions& options = {});
+                               std::vector<std::string>& warnings, const MeshLoadOptions& options = {}, bool instanceMeshes = true);
 
 }  // namespace tessera

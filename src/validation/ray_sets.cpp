@@ -9,6 +9,7 @@
 #include "core/frame.h"
 #include "core/rng.h"
 #include "core/sampling.h"
+#include "geometry/instances.h"
 #include "geometry/intersect.h"
 
 namespace tessera {
@@ -33,10 +34,10 @@ Vec3f randomPoint(Pcg32& rng, const Bounds3f& b) {
 
 /// The surface point of a hit, reconstructed from the primitive (as Scene::interaction does).
 Vec3f hitPoint(const SceneGeometry& g, const Ray& ray, const Hit& h) {
-    if (h.geomId < g.meshes.size()) {
-        const TriangleMesh& m = g.meshes[h.geomId];
-        const glm::uvec3& t = m.triangles[h.primId];
-        return (1.f - h.u - h.v) * m.positions[t.x] + h.u * m.positions[t.y] + h.v * m.positions[t.z];
+    if (const TriangleMesh* m = g.meshOf(h.geomId, h.instId)) {
+        const glm::uvec3& t = m->triangles[h.primId];
+        Vec3f p = (1.f - h.u - h.v) * m->positions[t.x] + h.u * m->positions[t.y] + h.v * m->positions[t.z];
+        return h.instId != kInvalidId ? instancePointToWorld(g.instances[h.instId], p) : p;  // an instance's mesh is in object space
     }
     const Sphere& s = g.spheres[h.primId];
     return sphereSurfacePoint(s.center, s.radius, ray.o + h.t * ray.d);
