@@ -94,7 +94,7 @@ TEST(Sampler, ScrambledDrawsKeepTheNetProperty) {
             const uint32_t n = 1u << m;
             std::vector<Vec2f> jitter(n), lens(n), light(n), bsdf(n), lightPath(n), connect(n);
             for (uint32_t i = 0; i < n; ++i) {
-                Sampler s(Vec2i(5, 9), i, seed);
+                Sampler s(Vec2i(5, 9), i, seed, SamplerKind::Sobol);
                 jitter[i] = s.get2D();
                 lens[i] = s.get2D();
                 s.startBounce(2);
@@ -121,7 +121,7 @@ TEST(Sampler, ScrambledDrawsKeepTheNetProperty) {
                     << why << " seed " << seed;
             std::vector<float> rr(n);
             for (uint32_t i = 0; i < n; ++i) {
-                Sampler s(Vec2i(5, 9), i, seed);
+                Sampler s(Vec2i(5, 9), i, seed, SamplerKind::Sobol);
                 s.startBounce(0);
                 rr[i] = s.get1D();
             }
@@ -155,7 +155,7 @@ TEST(Sampler, SeedsPixelsAndDimensionsAreUncorrelated) {
     auto draws = [&](Key k, int which) {
         std::vector<double> v(n);
         for (int i = 0; i < n; ++i) {
-            Sampler s(k.pixel, uint32_t(i), k.seed);
+            Sampler s(k.pixel, uint32_t(i), k.seed, SamplerKind::Sobol);
             Vec2f j = s.get2D();
             if (which == 0) { v[size_t(i)] = j.x; continue; }
             s.startBounce(which == 1 ? 0 : 1);
@@ -227,7 +227,7 @@ TEST(Sampler, HigherDimensionalProjectionsAreUniform) {
         for (int pixel = 0; pixel < 3; ++pixel) {
             std::vector<double> count;
             for (int i = 0; i < n; ++i) {
-                Sampler s(Vec2i(pixel, 7), uint32_t(i), 3);
+                Sampler s(Vec2i(pixel, 7), uint32_t(i), 3, SamplerKind::Sobol);
                 std::vector<float> u = p.draw(s);
                 if (count.empty()) count.assign(size_t(std::pow(p.binsPerAxis, double(u.size()))), 0.0);
                 size_t cell = 0;
@@ -257,7 +257,7 @@ TEST(Sampler, IndependentKindIsThePcgStreamAndIgnoresBlocks) {
 
 TEST(Sampler, DrawsArePureFunctionsOfPixelIndexSeedAndDimension) {
     // The same key gives the same value whatever was drawn before in other blocks.
-    Sampler a(Vec2i(1, 2), 33, 5), b(Vec2i(1, 2), 33, 5);
+    Sampler a(Vec2i(1, 2), 33, 5, SamplerKind::Sobol), b(Vec2i(1, 2), 33, 5, SamplerKind::Sobol);
     (void)a.get2D(), (void)a.get2D();
     a.startBounce(0);
     (void)a.get1D(), (void)a.get2D(), (void)a.get1D();
@@ -268,7 +268,7 @@ TEST(Sampler, DrawsArePureFunctionsOfPixelIndexSeedAndDimension) {
     EXPECT_EQ(u.x, v.x);
     EXPECT_EQ(u.y, v.y);
     // More draws than a block has slots still give fresh numbers, never a repeat of another block.
-    Sampler c(Vec2i(1, 2), 33, 5);
+    Sampler c(Vec2i(1, 2), 33, 5, SamplerKind::Sobol);
     c.startBounce(1);
     std::vector<float> seen;
     for (uint32_t k = 0; k < Sampler::kBlockSlots + 4; ++k) seen.push_back(c.get1D());
