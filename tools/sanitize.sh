@@ -31,10 +31,10 @@ if [ "$what" = tsan ] || [ "$what" = all ]; then
   # out: tests that run nothing in parallel (maths, samplers, camera, image I/O, scene errors, the
   # malformed-input corpora, the installed-library consumer) and the acceleration-structure tests,
   # whose BVH builder and ray validator run on oneTBB (uninstrumented in Debian: its hand-offs look
-  # like races; also the alpha-mask tests that run the validator). Embree's and OIIO's own threads are suppressed in tools/tsan.supp, with reasons.
+  # like races; also the alpha-mask tests that run the validator, and the instancing tests, whose structures are our BVHs). Embree's and OIIO's own threads are suppressed in tools/tsan.supp, with reasons.
   # history_size=7: the longest per-thread access history, so that the earlier access of a report
   # keeps its stack (a suppression can only match frames TSan restored; tools/tsan.supp).
   TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:history_size=7:suppressions=$root/tools/tsan.supp" \
-    run tsan thread -E '^(Accel|AccelRender|Bvh|KdTree|MalformedCorpus|MalformedMeshCorpus|Math|SamplingChi2|SceneErrors|Camera|ImageIo|ValidationVerdicts)\.|^AlphaMask\.Validat|^library_consumer$' || status=1
+    run tsan thread -E '^(Accel|AccelRender|Bvh|KdTree|MalformedCorpus|MalformedMeshCorpus|Math|SamplingChi2|SceneErrors|Camera|ImageIo|ValidationVerdicts|Instances)\.|^AlphaMask\.Validat|^library_consumer$' || status=1
 fi
 exit $status
