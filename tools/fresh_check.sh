@@ -120,11 +120,13 @@ begin "README command 2: tools/test.sh"
 in_fresh 'tools/test.sh 2>&1 | tee /root/test.log; exit ${PIPESTATUS[0]}'
 # Every test runs on a fresh machine: a skip here means an install or fetch step is missing (the
 # test meshes come from the npm registry; when it cannot be reached this fails, saying so).
-skipped="$(grep -cE '\*\*\*Skipped|Skipped  *[0-9.]+ sec' "$rootfs/root/test.log" || true)"
+# The one exception: farm_local_slurm needs CI set (then tools/test.sh installs slurm-wlm and the
+# test must run; .ci/run's own tools/test.sh step does that on the host), and the fresh root has no CI.
+skipped="$(grep -E '\*\*\*Skipped|Skipped  *[0-9.]+ sec' "$rootfs/root/test.log" | grep -cv 'farm_local_slurm' || true)"
 summary="$(grep -E 'tests passed|tests failed' "$rootfs/root/test.log" | tail -n 1)"
 echo "fresh_check: $summary; skipped: $skipped"
 if [ "$skipped" -ne 0 ]; then
-  grep -E '\*\*\*Skipped|Skipped  *[0-9.]+ sec' "$rootfs/root/test.log" >&2
+  grep -E '\*\*\*Skipped|Skipped  *[0-9.]+ sec' "$rootfs/root/test.log" | grep -v 'farm_local_slurm' >&2
   echo "fresh_check: $skipped test(s) skipped on the fresh machine" >&2
   exit 1
 fi
