@@ -187,12 +187,12 @@ void writeCheckpoint(const std::string& path, const CheckpointHeader& header, co
 
 namespace {
 
-/// Reads and checks the framing up to the payload (magic number, version, byte order, lengths) and
-/// verifies the CRC over the whole payload, leaving `f` at the payload's start. Returns the header text.
-std::string readFraming(Reader& r, FILE* f, const std::string& path, uint64_t size) {
+/// Reads and checks the framing's start (magic number, version, byte order) and returns the header
+/// text; checkpoints and partials share it.
+std::string readHeaderText(Reader& r, const std::string& path) {
     char magic[8];
     r.bytes(magic, sizeof magic, "magic number");
-    if (std::memcmp(magic, kMagic, sizeof magic) != 0) throw InputError(path + ": not a Tessera checkpoint");
+    if (std::memcmp(magic, kMagic, sizeof magic) != 0) throw InputError(path + ": not a Tessera checkpoint or partial");
     uint32_t version = r.value<uint32_t>("format version");
     uint32_t bom = r.value<uint32_t>("byte-order mark");
     if (bom != kByteOrderMark) throw InputError(path + ": checkpoint was written on a machine of the other byte order");
@@ -203,12 +203,19 @@ std::string readFraming(Reader& r, FILE* f, const std::string& path, uint64_t si
     if (headerBytes > r.left()) throw InputError(path + ": checkpoint is truncated (ends inside the header)");
     std::string text(headerBytes, '\0');
     r.bytes(text.data(), text.size(), "header");
+    return text;
+}
+
+/// Reads and checks the framing up to the payload (magic number, version, byte order, lengths) and
+/// verifies the CRC over the whole payload, leaving `f` at the payload's start. Returns the header text.
+std::string readFraming(Reader& r, FILE* f, const std::string& path, uint64_t size) {
+    std::string text = readHeaderText(r, path);
 
     // Verify the checksum over the whole file before trusting any length or value in it.
     uint64_t payload = r.value<uint64_t>("payload length");
     if (payload != r.left() - std::min<uint64_t>(r.left(), 4))
         throw InputError(path + ": checkpoint is truncated or has trailing bytes (" + std::to_string(size) + " bytes, expected " +
-                         std::to_string(kFramingBytes + headerBytes + payload) + ")");
+                         std::to_string(kFramingBytes + text.size() + payload) + ")");
     {
         long bodyStart = std::ftell(f);
         uLong crc = r.crc();
@@ -323,19 +330,7 @@ CheckpointHeader readCheckpointHeader(const std::string& path) {
     File f(std::fopen(path.c_str(), "rb"));
     if (!f) throw InputError(path + ": cannot open: " + std::strerror(errno));
     Reader r(f.get(), path, size);
-    char magic[8];
-    r.bytes(magic, sizeof magic, "magic number");
-    if (std::memcmp(magic, kMagic, sizeof magic) != 0) throw InputError(path + ": not a Tessera checkpoint or partial");
-    uint32_t version = r.value<uint32_t>("format version");
-    uint32_t bom = r.value<uint32_t>("byte-order mark");
-    if (bom != kByteOrderMark) throw InputError(path + ": checkpoint was written on a machine of the other byte order");
-    if (version != kFormatVersion)
-        throw InputError(path + ": checkpoint format version " + std::to_string(version) + ", this tessera reads version " +
-                         std::to_string(kFormatVersion));
-    uint64_t headerBytes = r.value<uint64_t>("header length");
-    if (headerBytes > r.left()) throw InputError(path + ": checkpoint is truncated (ends inside the header)");
-    std::string text(headerBytes, '\0');
-    r.bytes(text.data(), text.size(), "header");
+    std::string text = readHeaderText(r, path);
     return parseHeader(text);
 }
 
