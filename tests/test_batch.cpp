@@ -16,6 +16,7 @@
 #include "app/batch_jobs.h"
 #include "core/error.h"
 #include "io/image_output.h"
+#include "cli_run.h"
 #include "test_helpers.h"
 
 namespace {
@@ -25,11 +26,6 @@ using nlohmann::json;
 
 const std::string kBox = tessera::test::sourcePath("scenes/cornell-box/cornell-box.gltf");
 
-std::string readAll(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
 std::vector<std::string> lines(const std::string& text) {
     std::vector<std::string> out;
     std::stringstream ss(text);
@@ -37,19 +33,9 @@ std::vector<std::string> lines(const std::string& text) {
     return out;
 }
 
-struct CliRun {
-    int code = -1;
-    std::string out, err;
-};
+using tessera::test::CliRun;
 
-/// Runs `tessera ARGS` with stdout and stderr captured in `dir`.
-CliRun runTessera(const std::string& args, const fs::path& dir) {
-    std::string cmd = "cd '" + dir.string() + "' && " + std::string(TESSERA_BINARY) + " " + args + " > '" + (dir / "stdout.txt").string() + "' 2> '" +
-                      (dir / "stderr.txt").string() + "'";
-    int status = std::system(cmd.c_str());
-    EXPECT_TRUE(WIFEXITED(status)) << cmd << ": terminated by a signal";
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, readAll(dir / "stdout.txt"), readAll(dir / "stderr.txt")};
-}
+CliRun runTessera(const std::string& args, const fs::path& dir) { return tessera::test::runTessera(dir, args); }
 
 fs::path writeJobs(const fs::path& dir, const json& jobs, const std::string& name = "jobs.json") {
     std::ofstream(dir / name) << jobs.dump(2);
@@ -194,7 +180,7 @@ TEST(Batch, CameraByNameIndexNodeNameAndLookAt) {
     fs::path dir = tessera::test::tempDir("batch-cameras");
     // The box with two more cameras: "side" (cameras[1], node "sideNode") and an orthographic one
     // (cameras[2]), which the scene still loads with since its first camera renders.
-    json gltf = json::parse(readAll(kBox));
+    json gltf = json::parse(tessera::test::readWholeFile(kBox));
     fs::copy_file(fs::path(kBox).replace_extension(".bin"), dir / "cornell-box.bin");
     gltf["cameras"].push_back({{"name", "side"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.9}, {"znear", 0.01}}}});
     gltf["cameras"].push_back({{"name", "ortho"}, {"type", "orthographic"},
@@ -328,15 +314,15 @@ TEST(Batch, InterruptStopsTheBatchWithWhatItHas) {
     }
     // Signal once the first render reports progress (its scene is loaded and its structure built).
     auto start = std::chrono::steady_clock::now();
-    while (readAll(err).find("job 1/2") == std::string::npos && std::chrono::steady_clock::now() - start < std::chrono::seconds(30))
+    while (tessera::test::readWholeFile(err).find("job 1/2") == std::string::npos && std::chrono::steady_clock::now() - start < std::chrono::seconds(30))
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
     kill(pid, SIGINT);
     int status = 0;
     ASSERT_EQ(waitpid(pid, &status, 0), pid);
-    ASSERT_TRUE(WIFEXITED(status)) << readAll(err);
-    EXPECT_EQ(WEXITSTATUS(status), 130) << readAll(err);
+    ASSERT_TRUE(WIFEXITED(status)) << tessera::test::readWholeFile(err);
+    EXPECT_EQ(WEXITSTATUS(status), 130) << tessera::test::readWholeFile(err);
     EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(40));
-    json summary = json::parse(readAll(summaryFile));
+    json summary = json::parse(tessera::test::readWholeFile(summaryFile));
     EXPECT_EQ(summary["jobs"][0]["status"], "interrupted");
     EXPECT_EQ(summary["jobs"][1]["status"], "not run");
     EXPECT_EQ(summary["interrupted"], 1);

@@ -15,28 +15,16 @@
 #include "core/error.h"
 #include "io/image_output.h"
 #include "render/partial.h"
+#include "cli_run.h"
 #include "test_helpers.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-    int exitCode = -1;
-    std::string err;
-};
+using tessera::test::CliRun;
 
-CliRun tessera(const fs::path& dir, const std::string& args) {
-    fs::path err = dir / "stderr.txt";
-    std::string cmd = "timeout 120 " + std::string(TESSERA_BINARY) + " " + args + " 2> '" + err.string() + "' > /dev/null";
-    int status = std::system(cmd.c_str());
-    CliRun r;
-    EXPECT_TRUE(WIFEXITED(status)) << cmd << ": terminated by a signal";
-    if (WIFEXITED(status)) r.exitCode = WEXITSTATUS(status);
-    std::ifstream in(err);
-    r.err.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    return r;
-}
+CliRun tessera(const fs::path& dir, const std::string& args) { return tessera::test::runTessera(dir, args); }
 
 std::string scene(const std::string& name = "cornell-box") {
     return "'" + tessera::test::sourcePath("scenes/" + name + "/" + name + ".gltf") + "'";
@@ -53,33 +41,15 @@ fs::path renderPart(const fs::path& dir, const std::string& integrator, const st
     std::replace(name.begin(), name.end(), ':', '-');
     fs::path out = dir / (integrator + "_" + std::to_string(seed) + "_" + sceneName + "_" + name + ".partial");
     CliRun r = tessera(dir, "render " + scene(sceneName) + common(integrator, seed) + " --samples " + range + " -o '" + out.string() + "'");
-    EXPECT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(r.code, 0) << r.err;
     return out;
 }
 
-std::map<std::string, std::string> metadata(const tessera::io::Image& im) {
-    std::map<std::string, std::string> m;
-    for (const auto& [k, v] : im.metadata) m[k] = v;
-    return m;
-}
-
 void expectSameBits(const fs::path& a, const fs::path& b) {
-    tessera::io::Image x = tessera::io::readImage(a.string()), y = tessera::io::readImage(b.string());
-    ASSERT_EQ(x.width, y.width);
-    ASSERT_EQ(x.height, y.height);
-    ASSERT_EQ(x.rgba.size(), y.rgba.size());
-    size_t differing = 0;
-    for (size_t i = 0; i < x.rgba.size(); ++i) differing += std::memcmp(&x.rgba[i], &y.rgba[i], sizeof(float)) != 0;
-    EXPECT_EQ(differing, 0u) << "floats differing between " << a << " and " << b;
-    double sum = 0;
-    for (float v : x.rgba) sum += v;
-    EXPECT_GT(sum, 0.0);
-    auto mx = metadata(x), my = metadata(y);
-    for (const char* key : {"tessera:spp", "tessera:samples", "tessera:seed", "tessera:integrator", "tessera:resolution",
-                            "tessera:scene_hash", "tessera:max_depth", "tessera:nonfinite_dropped"}) {
-        ASSERT_TRUE(mx.count(key)) << key;
-        EXPECT_EQ(mx[key], my[key]) << key;
-    }
+    tessera::test::expectSameBitsAndProvenance(a, b,
+                                               {"tessera:spp", "tessera:samples", "tessera:seed", "tessera:integrator",
+                                                "tessera:resolution", "tessera:scene_hash", "tessera:max_depth",
+                                                "tessera:nonfinite_dropped"});
 }
 
 /// Parts 0:1, 1:7 and 7:16 (uneven, the first a single sample), merged from the command line in
@@ -88,14 +58,14 @@ void expectMergeIsBitIdentical(const std::string& integrator) {
     fs::path dir = tessera::test::tempDir("merge-" + integrator);
     fs::path full = dir / "full.exr";
     CliRun r = tessera(dir, "render " + scene() + common(integrator) + " --threads 2 -o '" + full.string() + "'");
-    ASSERT_EQ(r.exitCode, 0) << r.err;
+    ASSERT_EQ(r.code, 0) << r.err;
     fs::path a = renderPart(dir, integrator, "0:1"), b = renderPart(dir, integrator, "1:7"), c = renderPart(dir, integrator, "7:16");
     for (const std::string& order : {"'" + c.string() + "' '" + a.string() + "' '" + b.string() + "'",
                                      "'" + b.string() + "' '" + c.string() + "' '" + a.string() + "'"}) {
         fs::path merged = dir / "merged.exr";
         fs::path se = dir / "merged_stderr.exr";
         r = tessera(dir, "merge " + order + " --quiet --no-png -o '" + merged.string() + "' --stderr-image '" + se.string() + "'");
-        ASSERT_EQ(r.exitCode, 0) << r.err;
+        ASSERT_EQ(r.code, 0) << r.err;
         expectSameBits(merged, full);
         tessera::io::Image s = tessera::io::readImage(se.string());
         double seSum = 0;
@@ -112,7 +82,7 @@ TEST(Merge, BdptSplitsAreBitIdentical) { expectMergeIsBitIdentical("bdpt"); }
 /// Runs a merge expected to fail: exit 2, one line on stderr, which contains every `needles`.
 void expectRefused(const fs::path& dir, const std::string& parts, const std::vector<std::string>& needles) {
     CliRun r = tessera(dir, "merge " + parts + " --quiet --no-png -o '" + (dir / "refused.exr").string() + "'");
-    EXPECT_EQ(r.exitCode, 2) << r.err;
+    EXPECT_EQ(r.code, 2) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_EQ(r.err.rfind("tessera: error: ", 0), 0u) << r.err;
     for (const std::string& n : needles) EXPECT_NE(r.err.find(n), std::string::npos) << "'" << n << "' not in: " << r.err;
@@ -125,7 +95,7 @@ TEST(Merge, RefusesOverlapsAndGaps) {
     fs::path dir = tessera::test::tempDir("merge-refusals");
     fs::path a = renderPart(dir, "ptnee", "0:8"), b = renderPart(dir, "ptnee", "8:16"), overlap = renderPart(dir, "ptnee", "6:9");
     fs::path c = renderPart(dir, "ptnee", "12:16");
-    ASSERT_EQ(tessera(dir, "merge " + q(a) + q(b) + "--quiet --no-png -o " + q(dir / "ok.exr")).exitCode, 0);
+    ASSERT_EQ(tessera(dir, "merge " + q(a) + q(b) + "--quiet --no-png -o " + q(dir / "ok.exr")).code, 0);
     expectRefused(dir, q(a) + q(overlap) + q(b), {"overlapping partials", "0:8", "6:9", a.filename().string(), overlap.filename().string()});
     expectRefused(dir, q(a) + q(a) + q(b), {"overlapping partials", "0:8"});
     expectRefused(dir, q(c) + q(a), {"missing samples 8:12", "--allow-gaps"});
@@ -152,7 +122,7 @@ TEST(Merge, RefusesOtherSettingsAndCorruptFiles) {
     expectRefused(dir, q(a) + q(corrupt), {"corrupt.partial", "corrupt (CRC-32 mismatch)"});
     // An image is not a partial.
     fs::path exr = dir / "image.exr";
-    ASSERT_EQ(tessera(dir, "render " + scene() + common("ptnee") + " -o '" + exr.string() + "'").exitCode, 0);
+    ASSERT_EQ(tessera(dir, "render " + scene() + common("ptnee") + " -o '" + exr.string() + "'").code, 0);
     expectRefused(dir, q(a) + q(exr), {"image.exr", "not a Tessera checkpoint or partial"});
 }
 
@@ -161,9 +131,9 @@ TEST(Merge, AllowGapsRecordsTheMissingRanges) {
     fs::path a = renderPart(dir, "bdpt", "0:1"), c = renderPart(dir, "bdpt", "7:12");
     fs::path out = dir / "gaps.exr";
     CliRun r = tessera(dir, "merge " + q(c) + q(a) + "--allow-gaps --no-png -o " + q(out));
-    ASSERT_EQ(r.exitCode, 0) << r.err;
+    ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.err.find("missing samples 1:7,12:16"), std::string::npos) << r.err;
-    auto md = metadata(tessera::io::readImage(out.string()));
+    auto md = tessera::test::imageMetadata(tessera::io::readImage(out.string()));
     EXPECT_EQ(md["tessera:missing_samples"], "1:7,12:16");
     EXPECT_EQ(md["tessera:merged_samples"], "0:1,7:12");
     EXPECT_EQ(md["tessera:spp"], "6");
@@ -239,7 +209,7 @@ TEST(Merge, SampleRangeOptionIsChecked) {
     fs::path dir = tessera::test::tempDir("merge-options");
     for (const char* bad : {"8:4", "3:3", "-1:4", "a:b", "4", "0:17"}) {
         CliRun r = tessera(dir, "render " + scene() + common("ptnee") + " --samples " + bad + " -o '" + (dir / "x.partial").string() + "'");
-        EXPECT_EQ(r.exitCode, 2) << bad << ": " << r.err;
+        EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
         EXPECT_NE(r.err.find("--samples"), std::string::npos) << r.err;
     }
 }

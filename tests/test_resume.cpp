@@ -11,55 +11,25 @@
 #include <map>
 
 #include "io/image_output.h"
+#include "cli_run.h"
 #include "test_helpers.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-    int exitCode = -1;
-    std::string err;
-};
+using tessera::test::CliRun;
 
 /// Runs `tessera render` on the Cornell box with `args`; stderr is captured.
 CliRun render(const fs::path& dir, const std::string& args) {
-    fs::path err = dir / "stderr.txt";
-    std::string cmd = "timeout 120 " + std::string(TESSERA_BINARY) + " render '" +
-                      tessera::test::sourcePath("scenes/cornell-box/cornell-box.gltf") + "' --quiet --no-png " + args + " 2> '" +
-                      err.string() + "' > /dev/null";
-    int status = std::system(cmd.c_str());
-    CliRun r;
-    EXPECT_TRUE(WIFEXITED(status)) << cmd << ": terminated by a signal";
-    if (WIFEXITED(status)) r.exitCode = WEXITSTATUS(status);
-    std::ifstream in(err);
-    r.err.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    return r;
-}
-
-std::map<std::string, std::string> metadata(const tessera::io::Image& im) {
-    std::map<std::string, std::string> m;
-    for (const auto& [k, v] : im.metadata) m[k] = v;
-    return m;
+    return tessera::test::runTessera(dir, "render '" + tessera::test::sourcePath("scenes/cornell-box/cornell-box.gltf") +
+                                              "' --quiet --no-png " + args);
 }
 
 void expectSameImage(const fs::path& a, const fs::path& b) {
-    tessera::io::Image x = tessera::io::readImage(a.string()), y = tessera::io::readImage(b.string());
-    ASSERT_EQ(x.width, y.width);
-    ASSERT_EQ(x.height, y.height);
-    ASSERT_EQ(x.rgba.size(), y.rgba.size());
-    size_t differing = 0;
-    for (size_t i = 0; i < x.rgba.size(); ++i) differing += std::memcmp(&x.rgba[i], &y.rgba[i], sizeof(float)) != 0;
-    EXPECT_EQ(differing, 0u) << "floats differing between " << a << " and " << b;
-    double sum = 0;
-    for (float v : x.rgba) sum += v;
-    EXPECT_GT(sum, 0.0);
-    auto mx = metadata(x), my = metadata(y);
-    for (const char* key : {"tessera:spp", "tessera:samples", "tessera:seed", "tessera:integrator", "tessera:resolution",
-                            "tessera:scene_hash", "tessera:max_depth", "tessera:nonfinite_dropped", "tessera:interrupted"}) {
-        ASSERT_TRUE(mx.count(key)) << key;
-        EXPECT_EQ(mx[key], my[key]) << key;
-    }
+    auto [mx, my] = tessera::test::expectSameBitsAndProvenance(
+        a, b, {"tessera:spp", "tessera:samples", "tessera:seed", "tessera:integrator", "tessera:resolution", "tessera:scene_hash",
+               "tessera:max_depth", "tessera:nonfinite_dropped", "tessera:interrupted"});
     EXPECT_EQ(mx["tessera:interrupted"], "false");
     EXPECT_EQ(my["tessera:resumed"], "true");
 }
@@ -73,20 +43,20 @@ void expectResumeIsBitIdentical(const std::string& integrator, const std::vector
     // 80x56 with 32-pixel tiles: 6 tiles per pass; passes of 1, 1, 2, 4, 2 spp.
     std::string common = "--integrator " + integrator + " --spp 10 --resolution 80x56 --seed 11 ";
     CliRun full = render(dir, common + "--threads 2 -o '" + (dir / "full.exr").string() + "'");
-    ASSERT_EQ(full.exitCode, 0) << full.err;
+    ASSERT_EQ(full.code, 0) << full.err;
     std::string part = common + "-o '" + (dir / "part.exr").string() + "' ";
     fs::path ckpt = dir / "part.exr.ckpt";
     for (size_t k = 0; k < stops.size(); ++k) {
         std::string args = part + "--threads " + std::to_string(1 + k % 2) + " --stop-after-tiles " + std::to_string(stops[k]);
         CliRun stopped = render(dir, args + (k == 0 ? " --checkpoint 3600" : " --resume"));
-        ASSERT_EQ(stopped.exitCode, 130) << stopped.err;
+        ASSERT_EQ(stopped.code, 130) << stopped.err;
         ASSERT_TRUE(fs::exists(ckpt));
         // The interrupted render still wrote a valid EXR that says so.
-        auto md = metadata(tessera::io::readImage((dir / "part.exr").string()));
+        auto md = tessera::test::imageMetadata(tessera::io::readImage((dir / "part.exr").string()));
         EXPECT_EQ(md["tessera:interrupted"], "true");
     }
     CliRun resumed = render(dir, part + "--threads 2 --resume");
-    ASSERT_EQ(resumed.exitCode, 0) << resumed.err;
+    ASSERT_EQ(resumed.code, 0) << resumed.err;
     EXPECT_FALSE(fs::exists(ckpt)) << "a finished render leaves no checkpoint";
     expectSameImage(dir / "full.exr", dir / "part.exr");
     for (const auto& e : fs::directory_iterator(dir))
@@ -105,7 +75,7 @@ TEST(Resume, CorruptTruncatedOrMismatchedCheckpointIsRefused) {
     fs::path dir = tessera::test::tempDir("resume-refused");
     std::string args = "--spp 6 --resolution 48x40 -o '" + (dir / "x.exr").string() + "' ";
     CliRun stopped = render(dir, args + "--seed 2 --checkpoint 0 --stop-after-tiles 3");
-    ASSERT_EQ(stopped.exitCode, 130) << stopped.err;
+    ASSERT_EQ(stopped.code, 130) << stopped.err;
     fs::path ckpt = dir / "x.exr.ckpt";
     std::ifstream in(ckpt, std::ios::binary);
     std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -113,7 +83,7 @@ TEST(Resume, CorruptTruncatedOrMismatchedCheckpointIsRefused) {
     auto expectRefused = [&](const std::string& bytes, const std::string& extra, const std::string& reason) {
         std::ofstream(ckpt, std::ios::binary | std::ios::trunc) << bytes;
         CliRun r = render(dir, args + (extra.find("--seed") == std::string::npos ? "--seed 2 " : "") + extra + " --resume");
-        EXPECT_EQ(r.exitCode, 2) << reason << ": " << r.err;
+        EXPECT_EQ(r.code, 2) << reason << ": " << r.err;
         EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
         EXPECT_EQ(r.err.rfind("tessera: error: " + ckpt.string() + ": ", 0), 0u) << r.err;
         EXPECT_NE(r.err.find(reason), std::string::npos) << r.err;
@@ -130,13 +100,13 @@ TEST(Resume, CorruptTruncatedOrMismatchedCheckpointIsRefused) {
     expectRefused(good, "--fov 30", "camera is");
     fs::remove(ckpt);
     CliRun missing = render(dir, args + "--seed 2 --resume");
-    EXPECT_EQ(missing.exitCode, 2);
+    EXPECT_EQ(missing.code, 2);
     EXPECT_NE(missing.err.find("no checkpoint to resume"), std::string::npos) << missing.err;
     // A spp change is a different render: refused too, while the right one still resumes.
     std::ofstream(ckpt, std::ios::binary | std::ios::trunc) << good;
     CliRun other = render(dir, "--spp 7 --resolution 48x40 --seed 2 -o '" + (dir / "x.exr").string() + "' --resume");
-    EXPECT_EQ(other.exitCode, 2);
+    EXPECT_EQ(other.code, 2);
     EXPECT_NE(other.err.find("spp_target is '6' in the checkpoint, '7' now"), std::string::npos) << other.err;
     CliRun ok = render(dir, args + "--seed 2 --resume");
-    EXPECT_EQ(ok.exitCode, 0) << ok.err;
+    EXPECT_EQ(ok.code, 0) << ok.err;
 }
