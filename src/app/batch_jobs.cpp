@@ -162,7 +162,10 @@ private:
     std::string vec3(const json& v, const std::string& ptr) const {
         if (!v.is_array() || v.size() != 3) fail(ptr, "must be an array of three numbers [x, y, z]");
         std::string out;
-        for (size_t i = 0; i < 3; ++i) out += (i ? "," : "") + floatText(number(v[i], ptr + "/" + std::to_string(i), -1e30, 1e30));
+        for (size_t i = 0; i < 3; ++i) {
+            out += i ? "," : "";
+            out += floatText(number(v[i], ptr + "/" + std::to_string(i), -1e30, 1e30));
+        }
         return out;
     }
 
@@ -193,8 +196,10 @@ private:
             } else if (key == "look-at") {
                 if (!value.is_array() || value.size() < 2 || value.size() > 3)
                     fail(p, "must be [eye, target] or [eye, target, up], each [x, y, z]");
-                for (size_t i = 0; i < value.size(); ++i)
-                    f.job.lookAt += (i ? "," : "") + vec3(value[i], p + "/" + std::to_string(i));
+                for (size_t i = 0; i < value.size(); ++i) {
+                    f.job.lookAt += i ? "," : "";
+                    f.job.lookAt += vec3(value[i], p + "/" + std::to_string(i));
+                }
                 ++picks;
             } else if (key == "fov") {
                 f.job.fovDeg = number(value, p, 0.001, 179.0);
@@ -273,7 +278,10 @@ private:
         if (v.is_array()) {
             if (v.size() != 3) fail(ptr, "a colour must be [r, g, b]");
             r.env.clear();
-            for (size_t i = 0; i < 3; ++i) r.env += (i ? "," : "") + floatText(number(v[i], ptr + "/" + std::to_string(i), 0.0, 1e30));
+            for (size_t i = 0; i < 3; ++i) {
+                r.env += i ? "," : "";
+                r.env += floatText(number(v[i], ptr + "/" + std::to_string(i), 0.0, 1e30));
+            }
             return;
         }
         // As with --env, text with commas that names no file is a colour "r,g,b".

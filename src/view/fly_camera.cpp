@@ -97,7 +97,10 @@ std::string FlyCamera::renderArguments() const {
     Vec3f target = eye_ + forward();
     std::string s = "--look-at ";
     const float v[6] = {eye_.x, eye_.y, eye_.z, target.x, target.y, target.z};
-    for (int i = 0; i < 6; ++i) s += (i ? "," : "") + roundTrip(v[i]);
+    for (int i = 0; i < 6; ++i) {
+        s += i ? "," : "";
+        s += roundTrip(v[i]);
+    }
     return s + " --fov " + fovArgumentDegrees(start_.yfov);
 }
 
