@@ -116,9 +116,10 @@ TEST(Sampler, ScrambledDrawsKeepTheNetProperty) {
             // The lens is Sobol' dimensions 3-4: not a (0,2) pair, but each axis a (0,1)-sequence.
             for (int d = 0; d < 2; ++d)
                 EXPECT_TRUE(isNet(m, 0, 1, [&](uint32_t i, int) { return floatBits(lens[i][d]); }, why)) << "lens " << d << ": " << why;
-            if (m >= 3)
+            if (m >= 3) {
                 EXPECT_TRUE(isNet(m, 3, 4, [&](uint32_t i, int d) { return floatBits(d < 2 ? jitter[i][d] : lens[i][d - 2]); }, why))
                     << why << " seed " << seed;
+            }
             std::vector<float> rr(n);
             for (uint32_t i = 0; i < n; ++i) {
                 Sampler s(Vec2i(5, 9), i, seed, SamplerKind::Sobol);
