@@ -37,7 +37,7 @@ bool isNet(int m, int t, int dims, const std::function<uint32_t(uint32_t, int)>&
             for (uint32_t c : count)
                 if (c != (1u << t)) {
                     why = "m=" + std::to_string(m) + " cells";
-                    for (int k = 0; k < dims; ++k) why += " " + std::to_string(a[size_t(k)]);
+                    for (int k = 0; k < dims; ++k) why.append(" ").append(std::to_string(a[size_t(k)]));
                     why += ": a cell holds " + std::to_string(c);
                     return false;
                 }
@@ -349,7 +349,7 @@ TEST(SamplerConvergence, SobolSlopeOnTheCornellBoxIsSteeperThanIndependent) {
     double slopeIndependent = fittedSlope({spps.begin() + 1, spps.end()}, {independent.begin() + 1, independent.end()});
     std::string table;
     for (size_t i = 0; i < spps.size(); ++i)
-        table += " " + std::to_string(spps[i]) + ": " + std::to_string(sobol[i]) + " / " + std::to_string(independent[i]);
+        table.append(" ").append(std::to_string(spps[i])).append(": ").append(std::to_string(sobol[i])).append(" / ").append(std::to_string(independent[i]));
     EXPECT_LT(slopeSobol, -1.1) << "relMSE sobol / independent:" << table;
     EXPECT_GT(slopeIndependent, -1.15) << table;
     EXPECT_LT(slopeIndependent, -0.85) << table;
