@@ -101,10 +101,8 @@ BinaryBvh BvhAccel::buildBinaryTree(std::span<const Bounds3f> primBounds, const 
         };
         return buildSpatialSplitBvh(primBounds, triangleVertexList, clip, config_);
     }
-    std::vector<Vec3f> centroids(primBounds.size());
-    for (size_t i = 0; i < primBounds.size(); ++i) centroids[i] = primBounds[i].center();
     BinaryBvh bin;
-    auto build = [&] { bin = buildBinaryBvh(primBounds, centroids, config_); };
+    auto build = [&] { bin = buildBinaryBvh(primBounds, config_); };
     if (options.threads > 0) tbb::task_arena(options.threads).execute(build);  // the build's TBB tasks
     else build();
     return bin;
