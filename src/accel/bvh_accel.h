@@ -95,16 +95,26 @@ private:
     }
     /// The inner node an inner child reference (a byte offset into nodes_) names.
     const Node8& node(uint32_t ref) const { return *reinterpret_cast<const Node8*>(reinterpret_cast<const char*>(nodes_.data()) + ref); }
+    /// A triangle leaf of the binary tree (primIndices[first, first + count)) and its first block.
+    struct LeafBlocks {
+        uint32_t first, count, firstBlock;
+    };
     /// The binary tree over the gathered primitives (prims_, boxes `primBounds`).
-    BinaryBvh buildBinaryTree(std::span<const Bounds3f> primBounds, const AccelOptions& options) const;
+    BinaryBvh buildBinaryTree(std::span<const Bounds3f> primBounds) const;
     /// Collapses the binary tree into nodes_, triangles_ and mixedPrims_.
     void buildWideTree(const BinaryBvh& bin);
-    uint32_t collapse(const BinaryBvh& bin, uint32_t binNode);
-    uint32_t makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf);
+    /// The wide node over binary node `binNode`'s subtree (and, first, those below it): returns
+    /// its reference; `prims` gets the subtree's primitive count. Triangle leaves are numbered in
+    /// `leaves` (next block: `blocks`) and filled afterwards by fillLeaves.
+    uint32_t collapse(const BinaryBvh& bin, uint32_t binNode, std::vector<LeafBlocks>& leaves, uint32_t& blocks,
+                      uint32_t& prims);
+    uint32_t makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf, std::vector<LeafBlocks>& leaves, uint32_t& blocks);
+    void fillLeaves(const BinaryBvh& bin, const std::vector<LeafBlocks>& leaves, uint32_t blocks);
 
     const SceneGeometry& geometry_;
     BvhConfig config_;
     std::vector<PrimRef> prims_;  ///< build primitive index → (geomId, primId)
+    uint32_t triangleRefs_ = 0;   ///< prims_[0, triangleRefs_) are triangles, the rest spheres
     std::vector<Node8, HugePageAllocator<Node8>> nodes_;    ///< node 0 is the root (absent for an empty scene)
     std::vector<Triangle4, HugePageAllocator<Triangle4>> triangles_;
     std::vector<PrimRef> mixedPrims_;
