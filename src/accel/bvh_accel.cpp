@@ -360,7 +360,35 @@ std::string BvhAccel::checkInvariants() const {
     if (!problem.empty()) return problem;
     for (size_t i = 0; i < seen.size(); ++i)
         if (!seen[i]) return "primitive " + std::to_string(prims_[i].primId) + " of geometry " + std::to_string(prims_[i].geomId) + " unreachable";
+    if (std::string order = checkLaneOrder(); !order.empty()) return order;
     return checkLeafCoverage(geometry_, prims_, leafBoxesOf);
+}
+
+uint32_t BvhAccel::subtreeReferences(uint32_t ref, std::string& problem) const {
+    if (ref & kLeafBit) {
+        if (ref & kMixedBit) return ref & 15u;
+        uint32_t n = 0;
+        const Triangle4* blocks = leafBlocks(ref);
+        for (uint32_t b = 0; b <= (ref & 3u); ++b)
+            for (int lane = 0; lane < 4; ++lane) n += blocks[b].primId[lane] != kInvalidId;
+        return n;
+    }
+    const Node8& n = node(ref);
+    uint32_t total = 0, previous = ~0u;
+    for (int i = 0; i < 8; ++i) {
+        if (n.bounds[0][i] > n.bounds[3][i]) continue;  // an empty lane
+        uint32_t count = subtreeReferences(n.child[i], problem);
+        if (count > previous && problem.empty())
+            problem = "lanes of node " + std::to_string(ref / sizeof(Node8)) + " not ordered by subtree size";
+        previous = count, total += count;
+    }
+    return total;
+}
+
+std::string BvhAccel::checkLaneOrder() const {
+    std::string problem;
+    if (!nodes_.empty()) subtreeReferences(0, problem);
+    return problem;
 }
 
 }  // namespace tessera

@@ -36,7 +36,8 @@ public:
     void allowAvx2Kernels() { isa_.useBest(); }
     /// Checks the tree: every primitive with finite bounds reachable exactly once, each child box
     /// inside its parent's box, every primitive inside its leaf's box (with spatial splits: reachable
-    /// at least once, and meeting each leaf box that holds it). Returns "" or the first problem.
+    /// at least once, and meeting each leaf box that holds it), each node's lanes ordered by the
+    /// references below them, most first (the any-hit order). Returns "" or the first problem.
     std::string checkInvariants() const;
     /// Primitive references in the leaves: the primitive count, or more where spatial splits
     /// placed parts of a primitive in several leaves.
@@ -88,6 +89,9 @@ private:
     /// kept lane, or lane −1 when none is kept.
     TriangleCandidate filterMaskedLanes(const TriRay& r, const Triangle4& tri, float tMax) const;
     void prefetchChild(uint32_t ref) const;
+    /// References in the subtree of `ref`; sets `problem` where a node's lanes are out of order.
+    uint32_t subtreeReferences(uint32_t ref, std::string& problem) const;
+    std::string checkLaneOrder() const;
     void prefetchAny(uint32_t ref) const;
     /// The first Triangle4 block of a triangle leaf reference.
     const Triangle4* leafBlocks(uint32_t ref) const {
