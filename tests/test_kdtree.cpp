@@ -195,13 +195,34 @@ TEST(KdTree, CoincidentTrianglesTerminateFastAtTheDepthLimit) {
     expectMatchesEmbree(withMesh(fan), 1000, "depth limit 3", shallow);
 }
 
-TEST(KdTree, BuildIsReproducibleAndRetractsBadRefinements) {
-    // The build is serial (AccelOptions::threads does not reach it): two builds give the same tree.
+TEST(KdTree, BuildIsTheSameForAnyThreadCountAndRetractsBadRefinements) {
+    // Subtrees are built as parallel tasks, each into a tree of its own that is then appended: the
+    // tree (nodes, leaves, statistics) must be the serial one for any number of threads, also with
+    // tasks down to small subtrees and with the binned levels reaching far down.
     SceneGeometry g;
     g.meshes.push_back(makeUvSphereMesh(Vec3f(0), 1.f, 60, 120, 0));
-    KdTreeAccel one(g, AccelOptions{}), two(g, AccelOptions{});
+    g.meshes.push_back(longSlivers(2000).meshes[0]);
+    KdTreeAccel one(g, AccelOptions{1}), two(g, AccelOptions{});
     EXPECT_EQ(one.structureHash(), two.structureHash());
     EXPECT_EQ(one.checkInvariants(), "");
+    auto sameStats = [](const KdBuildStats& a, const KdBuildStats& b) {
+        return a.innerNodes == b.innerNodes && a.leaves == b.leaves && a.emptyLeaves == b.emptyLeaves &&
+               a.references == b.references && a.depthLimitHits == b.depthLimitHits && a.retractions == b.retractions &&
+               a.eventsSwept == b.eventsSwept && a.refsBinned == b.refsBinned && a.maxDepth == b.maxDepth &&
+               a.sahCost == b.sahCost;
+    };
+    for (uint32_t binnedAbove : {0u, 4096u, 64u}) {
+        KdConfig fine;
+        fine.parallelAbove = 16;
+        fine.binnedAbove = binnedAbove;
+        KdTreeAccel serial(g, AccelOptions{1}, fine);
+        EXPECT_EQ(serial.checkInvariants(), "") << "binned above " << binnedAbove;
+        for (int threads : {2, 4}) {
+            KdTreeAccel parallel(g, AccelOptions{threads}, fine);
+            EXPECT_EQ(parallel.structureHash(), serial.structureHash()) << threads << " threads, binned above " << binnedAbove;
+            EXPECT_TRUE(sameStats(parallel.buildStats(), serial.buildStats())) << threads << " threads, binned above " << binnedAbove;
+        }
+    }
     // Expensive traversal makes most refinements bad: they are tried, then retracted.
     KdConfig costly;
     costly.traversalCost = 3.f;

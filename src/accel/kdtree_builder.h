@@ -64,6 +64,9 @@ struct KdConfig {
     uint32_t binnedAbove = 4096;
     /// Bins per axis for the binned levels (candidate planes at the bins' inner boundaries).
     int binCount = 64;
+    /// Sibling subtrees over more than this many references are built in parallel (TBB tasks, when
+    /// the calling arena has several threads); 0 builds serially. The tree is the same either way.
+    uint32_t parallelAbove = 1024;
 };
 
 /// The hard cap on depth (traversal stacks hold this many entries).
@@ -109,7 +112,8 @@ struct KdTree {
 };
 
 /// Builds the tree over primitives with the given (finite, non-empty) boxes. `clip` may be empty, in
-/// which case straddling primitives keep their box clipped to the child cell. Deterministic.
+/// which case straddling primitives keep their box clipped to the child cell; it is called from
+/// several threads at once. Deterministic: the same tree for any number of threads.
 KdTree buildKdTree(std::span<const Bounds3f> primBounds, const KdClipFunction& clip, const KdConfig& config);
 
 }  // namespace tessera
