@@ -112,9 +112,13 @@ TEST(KdTree, PlanarTrianglesInTheSplitPlane) {
         addTriangle(m, a, a + Vec3f(0.02f, 0, 0.01f), a + Vec3f(0, 0.02f, -0.01f));
     }
     SceneGeometry g = withMesh(m);
-    KdTreeAccel kd(g, AccelOptions{});
+    // The exact sweep at the root (3,048 triangles; binned levels would choose among bin planes).
+    KdConfig sweep;
+    sweep.binnedAbove = 4096;
+    sweep.binCount = 64;
+    KdTreeAccel kd(g, AccelOptions{}, sweep);
     EXPECT_TRUE(hasSplitAt(kd, 2, 0.5f)) << "no split in the plane of the planar triangles";
-    expectMatchesEmbree(g, 3000, "planar triangles in the split plane");
+    expectMatchesEmbree(g, 3000, "planar triangles in the split plane", sweep);
     // This ray meets the plane 4.5e-8 from a grid vertex, where four leaf cells and the plane meet:
     // the hit cell is entered only thanks to the eps padding, one wide-node level below a cell that
     // also was. Wide nodes that compared their padded planes with the exact (there: inverted)
@@ -227,6 +231,7 @@ TEST(KdTree, BuildIsTheSameForAnyThreadCountAndRetractsBadRefinements) {
     KdConfig costly;
     costly.traversalCost = 3.f;
     costly.emptyBonus = 0.f;
+    costly.maxBadRefines = 1;
     KdTreeAccel kd(g, AccelOptions{}, costly);
     EXPECT_GT(kd.buildStats().retractions, 0u);
     EXPECT_LE(kd.buildStats().sahCost, 3.f * one.buildStats().sahCost);

@@ -384,8 +384,14 @@ private:
                 sah = AxisSah(cell, d, invArea, a, config_.emptyCutMinFraction);
             }
             uint64_t plane = eventPlane(e);
-            uint32_t typeCount[3] = {0, 0, 0};
-            while (i < n && eventPlane(events[i]) == plane) ++typeCount[eventType(events[i++])];
+            // Counts in registers: an array indexed by the type made every event a load-add-store
+            // whose store the next event's load waited for (a sixth of the build's time).
+            uint32_t ends = 0, planars = 0, starts = 0;
+            for (; i < n && eventPlane(events[i]) == plane; ++i) {
+                const uint32_t type = eventType(events[i]);
+                ends += type == kEnd, planars += type == kPlanar, starts += type == kStart;
+            }
+            const uint32_t typeCount[3] = {ends, planars, starts};
             uint32_t np = typeCount[kPlanar];
             nr -= typeCount[kPlanar] + typeCount[kEnd];
             float p = eventPos(e);
