@@ -17,6 +17,7 @@
 
 #include "accel/bvh_accel.h"
 #include "accel/kdtree_accel.h"
+#include "app/bench_accel_processes.h"
 #include "app/commands.h"
 #include "core/error.h"
 #include "geometry/instances.h"
@@ -154,7 +155,8 @@ int runComplexity(const std::vector<std::string>& inputs, const std::vector<std:
 struct BenchOptions {
     std::vector<std::string> inputs;
     std::string accels = "bvh,embree", rays = "primary,diffuse,shadow";
-    int threads = 1, repeat = 5, resolution = 1024;
+    int threads = 1, repeat = 5, resolution = 1024, processes = 1;
+    double agreeWithin = 0.05;
     uint64_t seed = 1;
     bool json = false, complexity = false, flattened = false;
 };
@@ -294,12 +296,30 @@ Runner addBenchAccelCommand(CLI::App& app) {
     cmd->add_flag("--flattened", opt->flattened,
                   "instanced scenes: also every structure over the flattened copy (NAME-flat), for memory and speed");
     cmd->add_flag("--complexity", opt->complexity, "build times only, with build time / (N log2 N) per input");
+    cmd->add_option("--processes", opt->processes,
+                    "run the benchmark in this many fresh processes, one after another, and report every figure as "
+                    "the median over them with its range and spread (a process's memory layout can slow one ray kind "
+                    "by 25-40% for its whole life)")
+        ->capture_default_str();
+    cmd->add_option("--agree-within", opt->agreeWithin,
+                    "with --processes: the largest spread (max - min) / median a ratio to embree may have to count as "
+                    "reproducible (reported)")
+        ->capture_default_str();
     return [opt] {
         std::vector<std::string> accels = splitList(opt->accels), kinds = splitList(opt->rays);
         for (const std::string& k : kinds)
             if (k != "primary" && k != "diffuse" && k != "shadow") throw InputError("--rays: unknown kind '" + k + "'");
         AccelOptions options;
         options.threads = opt->threads;
+        if (opt->processes > 1) {
+            if (opt->complexity) throw InputError("bench-accel: --processes does not apply to --complexity");
+            std::vector<std::string> args{"bench-accel", "--json", "--accel", opt->accels, "--rays", opt->rays,
+                                          "--threads", std::to_string(opt->threads), "--repeat", std::to_string(opt->repeat),
+                                          "--resolution", std::to_string(opt->resolution), "--seed", std::to_string(opt->seed)};
+            if (opt->flattened) args.push_back("--flattened");
+            args.insert(args.end(), opt->inputs.begin(), opt->inputs.end());
+            return runBenchProcesses(args, opt->processes, opt->agreeWithin, opt->json);
+        }
         if (opt->complexity) return runComplexity(opt->inputs, accels, options, opt->repeat, opt->json);
         nlohmann::json report = {{"threads", opt->threads}, {"repeat", opt->repeat}, {"resolution", opt->resolution},
                                  {"bvhConfig", configJson(BvhConfig{})},
