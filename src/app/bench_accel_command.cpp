@@ -71,13 +71,35 @@ inline bool trace(const Accel& accel, const Ray& r, Query q, Hit& h) {
     return false;
 }
 
+/// One thread's loop over all rays (out of line, so that its frame and the traversal's stack lie
+/// where the caller put the stack pointer).
+__attribute__((noinline)) size_t traceAll(const Accel& accel, const std::vector<Ray>& rays, Query query) {
+    size_t hits = 0;
+    Hit h;
+    for (const Ray& r : rays) hits += trace(accel, r, query, h);
+    return hits;
+}
+
+/// traceAll with the stack pointer moved, first, to `pageOffset` bytes into a 4 KiB page (a layout
+/// experiment: the traversal's stack then has the same page offset in every process, where ASLR
+/// otherwise draws it afresh at each start); a negative offset leaves the stack where it is.
+size_t traceAllAtStackOffset(const Accel& accel, const std::vector<Ray>& rays, Query query, int pageOffset) {
+    if (pageOffset < 0) return traceAll(accel, rays, query);
+    char probe = 0;
+    const uintptr_t sp = reinterpret_cast<uintptr_t>(&probe);
+    const size_t shift = (sp - uintptr_t(pageOffset)) & 4095u;
+    volatile char* pad = static_cast<char*>(__builtin_alloca(shift + 64));
+    pad[0] = probe;  // keeps the allocation
+    return traceAll(accel, rays, query);
+}
+
 /// Seconds to trace all rays; `checksum` keeps the work.
-double traceSeconds(const Accel& accel, const std::vector<Ray>& rays, Query query, int threads, size_t& checksum) {
+double traceSeconds(const Accel& accel, const std::vector<Ray>& rays, Query query, int threads, size_t& checksum,
+                    int stackPageOffset) {
     auto start = std::chrono::steady_clock::now();
     size_t hits = 0;
     if (threads == 1) {
-        Hit h;
-        for (const Ray& r : rays) hits += trace(accel, r, query, h);
+        hits = traceAllAtStackOffset(accel, rays, query, stackPageOffset);
     } else {
         std::atomic<size_t> total{0};
         auto body = [&] {
@@ -155,7 +177,7 @@ int runComplexity(const std::vector<std::string>& inputs, const std::vector<std:
 struct BenchOptions {
     std::vector<std::string> inputs;
     std::string accels = "bvh,embree", rays = "primary,diffuse,shadow";
-    int threads = 1, repeat = 5, resolution = 1024, processes = 1;
+    int threads = 1, repeat = 5, resolution = 1024, processes = 1, stackPageOffset = -1;
     double agreeWithin = 0.05;
     uint64_t seed = 1;
     bool json = false, complexity = false, flattened = false;
@@ -255,7 +277,7 @@ nlohmann::json benchInput(const std::string& input, const std::vector<std::strin
             for (const std::string& kind : kinds) {
                 const std::vector<Ray>& set = rays.get(kind);
                 Query query = kind == "shadow" ? Query::Any : kind == "primary" ? Query::ClosestCoherent : Query::Closest;
-                double s = traceSeconds(*accel, set, query, opt.threads, checksum);
+                double s = traceSeconds(*accel, set, query, opt.threads, checksum, opt.stackPageOffset);
                 m.mrays[kind].push_back(double(set.size()) / s * 1e-6);
             }
         }
@@ -301,6 +323,10 @@ Runner addBenchAccelCommand(CLI::App& app) {
                     "the median over them with its range and spread (a process's memory layout can slow one ray kind "
                     "by 25-40% for its whole life)")
         ->capture_default_str();
+    cmd->add_option("--stack-page-offset", opt->stackPageOffset,
+                    "layout experiment (one thread): trace with the stack pointer at this byte offset into a 4 KiB "
+                    "page, the same in every process (-1: where ASLR put it)")
+        ->capture_default_str();
     cmd->add_option("--agree-within", opt->agreeWithin,
                     "with --processes: the largest spread (max - min) / median a ratio to embree may have to count as "
                     "reproducible (reported)")
@@ -317,11 +343,12 @@ Runner addBenchAccelCommand(CLI::App& app) {
                                           "--threads", std::to_string(opt->threads), "--repeat", std::to_string(opt->repeat),
                                           "--resolution", std::to_string(opt->resolution), "--seed", std::to_string(opt->seed)};
             if (opt->flattened) args.push_back("--flattened");
+            if (opt->stackPageOffset >= 0) args.insert(args.end(), {"--stack-page-offset", std::to_string(opt->stackPageOffset)});
             args.insert(args.end(), opt->inputs.begin(), opt->inputs.end());
             return runBenchProcesses(args, opt->processes, opt->agreeWithin, opt->json);
         }
         if (opt->complexity) return runComplexity(opt->inputs, accels, options, opt->repeat, opt->json);
-        nlohmann::json report = {{"threads", opt->threads}, {"repeat", opt->repeat}, {"resolution", opt->resolution},
+        nlohmann::json report = {{"threads", opt->threads}, {"repeat", opt->repeat}, {"resolution", opt->resolution}, {"stackPageOffset", opt->stackPageOffset},
                                  {"bvhConfig", configJson(BvhConfig{})},
                                  {"kdConfig", kdConfigJson(KdConfig{})}, {"inputs", nlohmann::json::array()}};
         if (!opt->json) std::cout << "config: threads " << opt->threads << ", repeat " << opt->repeat << ", bvh "
