@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <atomic>
 #include <iomanip>
@@ -93,13 +94,25 @@ size_t traceAllAtStackOffset(const Accel& accel, const std::vector<Ray>& rays, Q
     return traceAll(accel, rays, query);
 }
 
-/// Seconds to trace all rays; `checksum` keeps the work.
+/// Seconds of CPU time of `clock` (CLOCK_THREAD_CPUTIME_ID, CLOCK_PROCESS_CPUTIME_ID).
+double cpuSeconds(clockid_t clock) {
+    timespec ts{};
+    clock_gettime(clock, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+/// Seconds to trace all rays; `checksum` keeps the work. `cpuClock` (one thread only): the
+/// thread's CPU time instead of the wall clock, so that time the thread spends descheduled on a
+/// shared machine does not count.
 double traceSeconds(const Accel& accel, const std::vector<Ray>& rays, Query query, int threads, size_t& checksum,
-                    int stackPageOffset) {
+                    int stackPageOffset, bool cpuClock) {
     auto start = std::chrono::steady_clock::now();
     size_t hits = 0;
     if (threads == 1) {
+        const double cpuStart = cpuSeconds(CLOCK_THREAD_CPUTIME_ID);
         hits = traceAllAtStackOffset(accel, rays, query, stackPageOffset);
+        checksum += hits;
+        if (cpuClock) return cpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpuStart;
     } else {
         std::atomic<size_t> total{0};
         auto body = [&] {
@@ -113,8 +126,8 @@ double traceSeconds(const Accel& accel, const std::vector<Ray>& rays, Query quer
         if (threads > 0) tbb::task_arena(threads).execute(body);
         else body();
         hits = total;
+        checksum += hits;
     }
-    checksum += hits;
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -178,6 +191,9 @@ struct BenchOptions {
     std::vector<std::string> inputs;
     std::string accels = "bvh,embree", rays = "primary,diffuse,shadow";
     int threads = 1, repeat = 5, resolution = 1024, processes = 1, stackPageOffset = -1;
+    std::string clock = "cpu";
+    /// Timings by CPU time: asked for, and meaningful (one thread).
+    bool cpuClock() const { return clock == "cpu" && threads == 1; }
     double agreeWithin = 0.05;
     uint64_t seed = 1;
     bool json = false, complexity = false, flattened = false;
@@ -266,18 +282,22 @@ nlohmann::json benchInput(const std::string& input, const std::vector<std::strin
     size_t checksum = 0;
     for (int rep = 0; rep < opt.repeat; ++rep) {
         for (const Run& run : runs) {  // interleaved: each repeat runs every structure
+            const double cpuStart = cpuSeconds(CLOCK_PROCESS_CPUTIME_ID);
             auto accel = createAccel(run.structure, *run.geometry, options);
+            const double buildCpu = cpuSeconds(CLOCK_PROCESS_CPUTIME_ID) - cpuStart;
             Measured& m = measured[run.label];
             m.geometryBytes = geometryBytes(*run.geometry);
             m.instanced = !run.geometry->instances.empty();
             m.flattened = run.geometry == &flat;
             m.stats = accel->stats();
             m.kdStats = kdStatsJson(*accel);
-            m.buildSeconds.push_back(accel->stats().buildSeconds);
+            // The CPU clock counts the whole createAccel (geometry gathering included) of all the
+            // process's threads: with one thread, what the build cost; several threads' work adds up.
+            m.buildSeconds.push_back(opt.cpuClock() ? buildCpu : accel->stats().buildSeconds);
             for (const std::string& kind : kinds) {
                 const std::vector<Ray>& set = rays.get(kind);
                 Query query = kind == "shadow" ? Query::Any : kind == "primary" ? Query::ClosestCoherent : Query::Closest;
-                double s = traceSeconds(*accel, set, query, opt.threads, checksum, opt.stackPageOffset);
+                double s = traceSeconds(*accel, set, query, opt.threads, checksum, opt.stackPageOffset, opt.cpuClock());
                 m.mrays[kind].push_back(double(set.size()) / s * 1e-6);
             }
         }
@@ -323,6 +343,12 @@ Runner addBenchAccelCommand(CLI::App& app) {
                     "the median over them with its range and spread (a process's memory layout can slow one ray kind "
                     "by 25-40% for its whole life)")
         ->capture_default_str();
+    cmd->add_option("--clock", opt->clock,
+                    "cpu: with --threads 1, time builds by the process's CPU time and tracing by the thread's, so "
+                    "that time spent descheduled on a shared machine does not count; wall: the wall clock (always "
+                    "with several threads)")
+        ->check(CLI::IsMember({"cpu", "wall"}))
+        ->capture_default_str();
     cmd->add_option("--stack-page-offset", opt->stackPageOffset,
                     "layout experiment (one thread): trace with the stack pointer at this byte offset into a 4 KiB "
                     "page, the same in every process (-1: where ASLR put it)")
@@ -343,15 +369,17 @@ Runner addBenchAccelCommand(CLI::App& app) {
                                           "--threads", std::to_string(opt->threads), "--repeat", std::to_string(opt->repeat),
                                           "--resolution", std::to_string(opt->resolution), "--seed", std::to_string(opt->seed)};
             if (opt->flattened) args.push_back("--flattened");
+            args.insert(args.end(), {"--clock", opt->clock});
             if (opt->stackPageOffset >= 0) args.insert(args.end(), {"--stack-page-offset", std::to_string(opt->stackPageOffset)});
             args.insert(args.end(), opt->inputs.begin(), opt->inputs.end());
             return runBenchProcesses(args, opt->processes, opt->agreeWithin, opt->json);
         }
         if (opt->complexity) return runComplexity(opt->inputs, accels, options, opt->repeat, opt->json);
         nlohmann::json report = {{"threads", opt->threads}, {"repeat", opt->repeat}, {"resolution", opt->resolution}, {"stackPageOffset", opt->stackPageOffset},
+                                 {"clock", opt->cpuClock() ? "cpu" : "wall"},
                                  {"bvhConfig", configJson(BvhConfig{})},
                                  {"kdConfig", kdConfigJson(KdConfig{})}, {"inputs", nlohmann::json::array()}};
-        if (!opt->json) std::cout << "config: threads " << opt->threads << ", repeat " << opt->repeat << ", bvh "
+        if (!opt->json) std::cout << "config: threads " << opt->threads << ", repeat " << opt->repeat << ", clock " << (opt->cpuClock() ? "cpu" : "wall") << ", bvh "
                                   << configJson(BvhConfig{}).dump() << ", kdtree "
                                   << kdConfigJson(KdConfig{}).dump() << "\n";
         for (const std::string& input : opt->inputs)

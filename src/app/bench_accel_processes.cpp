@@ -112,12 +112,13 @@ int runBenchProcesses(const std::vector<std::string>& childArgs, int processes, 
     // per process (Embree traced in the same process, interleaved), then summarised.
     const nlohmann::json& first = runs.front();
     nlohmann::json report = {{"processes", processes}, {"threads", first["threads"]}, {"repeat", first["repeat"]},
-                             {"resolution", first["resolution"]}, {"bvhConfig", first["bvhConfig"]},
+                             {"resolution", first["resolution"]}, {"clock", first["clock"]}, {"bvhConfig", first["bvhConfig"]},
                              {"kdConfig", first["kdConfig"]}, {"inputs", nlohmann::json::array()}};
     double worstSpread = 0.0;
     std::string worstWhat;
     if (!json)
-        std::cout << "config: threads " << first["threads"] << ", repeat " << first["repeat"] << " per process, " << processes
+        std::cout << "config: threads " << first["threads"] << ", repeat " << first["repeat"] << " per process, clock "
+                  << first["clock"].get<std::string>() << ", " << processes
                   << " processes; each figure: median over processes [smallest–largest, (largest − smallest) / median]\n";
     for (size_t i = 0; i < first["inputs"].size(); ++i) {
         const nlohmann::json& in = first["inputs"][i];
