@@ -81,24 +81,27 @@ inline void appendEvents(const Bounds3f& b, uint32_t prim, std::vector<Event>& o
 }
 
 /// Stable LSD radix sort on the key bits above the primitive (axis, position, type): 3 passes of
-/// 12 bits. Events are generated in primitive order, so the result is sorted by the whole key.
-void radixSortEvents(std::vector<Event>& events) {
-    std::vector<Event> tmp(events.size());
+/// 12 bits, from `src` to `dst` and back (`src` is scratch; the result lies in `dst`). Events are
+/// generated in primitive order, so the result is sorted by the whole key.
+void radixSortEventsInto(Event* src, Event* dst, size_t n) {
     constexpr int kBits = 12;
     constexpr size_t kBuckets = size_t(1) << kBits;
     std::vector<size_t> count(kBuckets);
+    Event* from = src;
+    Event* to = dst;
     for (int shift = kPrimBits; shift < 64; shift += kBits) {
         std::fill(count.begin(), count.end(), 0);
-        for (Event e : events) ++count[(e >> shift) & (kBuckets - 1)];
+        for (size_t i = 0; i < n; ++i) ++count[(from[i] >> shift) & (kBuckets - 1)];
         size_t sum = 0;
         for (size_t& c : count) {
-            size_t n = c;
+            size_t k = c;
             c = sum;
-            sum += n;
+            sum += k;
         }
-        for (Event e : events) tmp[count[(e >> shift) & (kBuckets - 1)]++] = e;
-        events.swap(tmp);
+        for (size_t i = 0; i < n; ++i) to[count[(from[i] >> shift) & (kBuckets - 1)]++] = from[i];
+        std::swap(from, to);
     }
+    static_assert((64 - kPrimBits) / kBits % 2 == 1, "an odd number of passes leaves the result in dst");
 }
 
 /// A node's sorted events. Not a std::vector: children's lists are written once by a merge, and
@@ -342,15 +345,14 @@ private:
     }
 
     /// The sorted events of `refs` (sorted by primitive, so the stable radix sort on the upper key
-    /// bits sorts by the whole key).
-    static void eventsOf(const std::vector<Ref>& refs, EventList& events) {
-        std::vector<Event> list;
-        list.reserve(refs.size() * 6);
+    /// bits sorts by the whole key), generated into the thread's scratch and sorted into the list.
+    void eventsOf(const std::vector<Ref>& refs, EventList& events) {
+        std::vector<Event>& list = scratch_.local().unsorted;
+        list.clear();
         for (int a = 0; a < 3; ++a)
             for (const Ref& r : refs) appendAxisEvents(r.box, a, r.prim, list);
-        radixSortEvents(list);
         events.allocate(list.size());
-        std::copy(list.begin(), list.end(), events.data.get());
+        radixSortEventsInto(list.data(), events.data.get(), list.size());
     }
 
     /// B(n) = max(1, n / sahBlockSize) for n > 0: a leaf test costs one SIMD block at least, and
@@ -530,7 +532,7 @@ private:
         explicit Scratch(size_t primitives) : side(primitives, kBoth) {}
         std::vector<uint8_t> side;  ///< per primitive: its side of the plane being split
         std::vector<uint32_t> straddlers;
-        std::vector<Event> keptLeft, keptRight, newLeft, newRight;
+        std::vector<Event> keptLeft, keptRight, newLeft, newRight, unsorted;
         std::vector<uint32_t> binStart, binEnd;
     };
 
@@ -571,10 +573,9 @@ KdTree buildKdTree(std::span<const Bounds3f> primBounds, const KdClipFunction& c
         // Per axis, in primitive order: the radix sort is stable, so equal keys stay by primitive.
         for (int a = 0; a < 3; ++a)
             for (uint32_t i = 0; i < n; ++i) appendAxisEvents(primBounds[i], a, i, events);
-        radixSortEvents(events);
         EventList root;
         root.allocate(events.size());
-        std::copy(events.begin(), events.end(), root.data.get());
+        radixSortEventsInto(events.data(), root.data.get(), events.size());
         std::vector<Event>().swap(events);
         tree.stats.sahCost = builder.build(root, uint32_t(n), tree.bounds, 0, 0, tree);
     }
