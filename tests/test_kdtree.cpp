@@ -112,9 +112,13 @@ TEST(KdTree, PlanarTrianglesInTheSplitPlane) {
         addTriangle(m, a, a + Vec3f(0.02f, 0, 0.01f), a + Vec3f(0, 0.02f, -0.01f));
     }
     SceneGeometry g = withMesh(m);
-    KdTreeAccel kd(g, AccelOptions{});
+    // The exact sweep at the root (3,048 triangles; binned levels would choose among bin planes).
+    KdConfig sweep;
+    sweep.binnedAbove = 4096;
+    sweep.binCount = 64;
+    KdTreeAccel kd(g, AccelOptions{}, sweep);
     EXPECT_TRUE(hasSplitAt(kd, 2, 0.5f)) << "no split in the plane of the planar triangles";
-    expectMatchesEmbree(g, 3000, "planar triangles in the split plane");
+    expectMatchesEmbree(g, 3000, "planar triangles in the split plane", sweep);
     // This ray meets the plane 4.5e-8 from a grid vertex, where four leaf cells and the plane meet:
     // the hit cell is entered only thanks to the eps padding, one wide-node level below a cell that
     // also was. Wide nodes that compared their padded planes with the exact (there: inverted)
@@ -195,17 +199,39 @@ TEST(KdTree, CoincidentTrianglesTerminateFastAtTheDepthLimit) {
     expectMatchesEmbree(withMesh(fan), 1000, "depth limit 3", shallow);
 }
 
-TEST(KdTree, BuildIsReproducibleAndRetractsBadRefinements) {
-    // The build is serial (AccelOptions::threads does not reach it): two builds give the same tree.
+TEST(KdTree, BuildIsTheSameForAnyThreadCountAndRetractsBadRefinements) {
+    // Subtrees are built as parallel tasks, each into a tree of its own that is then appended: the
+    // tree (nodes, leaves, statistics) must be the serial one for any number of threads, also with
+    // tasks down to small subtrees and with the binned levels reaching far down.
     SceneGeometry g;
     g.meshes.push_back(makeUvSphereMesh(Vec3f(0), 1.f, 60, 120, 0));
-    KdTreeAccel one(g, AccelOptions{}), two(g, AccelOptions{});
+    g.meshes.push_back(longSlivers(2000).meshes[0]);
+    KdTreeAccel one(g, AccelOptions{1}), two(g, AccelOptions{});
     EXPECT_EQ(one.structureHash(), two.structureHash());
     EXPECT_EQ(one.checkInvariants(), "");
+    auto sameStats = [](const KdBuildStats& a, const KdBuildStats& b) {
+        return a.innerNodes == b.innerNodes && a.leaves == b.leaves && a.emptyLeaves == b.emptyLeaves &&
+               a.references == b.references && a.depthLimitHits == b.depthLimitHits && a.retractions == b.retractions &&
+               a.eventsSwept == b.eventsSwept && a.refsBinned == b.refsBinned && a.maxDepth == b.maxDepth &&
+               a.sahCost == b.sahCost;
+    };
+    for (uint32_t binnedAbove : {0u, 4096u, 64u}) {
+        KdConfig fine;
+        fine.parallelAbove = 16;
+        fine.binnedAbove = binnedAbove;
+        KdTreeAccel serial(g, AccelOptions{1}, fine);
+        EXPECT_EQ(serial.checkInvariants(), "") << "binned above " << binnedAbove;
+        for (int threads : {2, 4}) {
+            KdTreeAccel parallel(g, AccelOptions{threads}, fine);
+            EXPECT_EQ(parallel.structureHash(), serial.structureHash()) << threads << " threads, binned above " << binnedAbove;
+            EXPECT_TRUE(sameStats(parallel.buildStats(), serial.buildStats())) << threads << " threads, binned above " << binnedAbove;
+        }
+    }
     // Expensive traversal makes most refinements bad: they are tried, then retracted.
     KdConfig costly;
     costly.traversalCost = 3.f;
     costly.emptyBonus = 0.f;
+    costly.maxBadRefines = 1;
     KdTreeAccel kd(g, AccelOptions{}, costly);
     EXPECT_GT(kd.buildStats().retractions, 0u);
     EXPECT_LE(kd.buildStats().sahCost, 3.f * one.buildStats().sahCost);

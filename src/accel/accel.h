@@ -25,8 +25,8 @@ struct AccelStats {
 };
 
 struct AccelOptions {
-    /// Threads for the builds that run in parallel (0 = all): Embree's device and our BVH's
-    /// object-split build. The k-d tree and spatial-split builds are serial.
+    /// Threads for the builds that run in parallel (0 = all): Embree's device, our BVH's
+    /// object-split build and the k-d tree build. The spatial-split build is serial.
     int threads = 0;
 };
 

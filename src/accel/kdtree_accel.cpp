@@ -10,12 +10,13 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <tbb/task_arena.h>
+
 #include "accel/triangle_simd.h"
 
 namespace tessera {
 
-KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& /*options: the build is serial*/,
-                         const KdConfig& config)
+KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& options, const KdConfig& config)
     : geometry_(geometry), config_(config) {
     auto start = std::chrono::steady_clock::now();
     bounds_ = geometry.bounds();
@@ -24,7 +25,10 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& /*op
     // it. The traversal is conservative instead (kdtree_traversal.cpp).
     GatheredPrimitives gathered = gatherPrimitives(geometry, /*padTriangles=*/false);
     prims_ = std::move(gathered.refs);
-    KdTree tree = buildBinaryTree(gathered.bounds);
+    KdTree tree;
+    auto build = [&] { tree = buildBinaryTree(gathered.bounds); };
+    if (options.threads > 0) tbb::task_arena(options.threads).execute(build);  // the builder's TBB tasks
+    else build();
     rootCell_ = tree.bounds;
     sceneMagnitude_ = std::max(maxComponent(glm::abs(rootCell_.lower)), maxComponent(glm::abs(rootCell_.upper)));
     if (!std::isfinite(sceneMagnitude_)) sceneMagnitude_ = 0.f;

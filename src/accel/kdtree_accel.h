@@ -78,8 +78,7 @@ private:
     /// kCoherent: branches on the entered-slot count (camera rays, intersectCoherent).
     /// kMasked: the kernels of scenes with cut-outs (alpha masks); without it, no alpha code at all,
     /// so scenes without cut-outs run exactly the kernels they ran before masks existed.
-    template <bool kAvx, bool kCoherent, bool kMasked> bool intersectImpl(const Ray& ray, Hit& hit) const;
-    template <bool kAvx, bool kMasked> bool occludedImpl(const Ray& ray) const;
+    template <bool kAvx, bool kCoherent, bool kMasked, bool kAnyHit> bool intersectImpl(const Ray& ray, Hit& hit) const;
     // The same traversal compiled for AVX2 (one instruction per 8-lane leaf step): defined, and
     // called, on x86 only (kernel_isa.h).
     bool intersectAvx2(const Ray& ray, Hit& hit) const;

@@ -6,6 +6,10 @@
 #include <limits>
 #include <memory>
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
+
 #include "core/error.h"
 
 namespace tessera {
@@ -77,24 +81,27 @@ inline void appendEvents(const Bounds3f& b, uint32_t prim, std::vector<Event>& o
 }
 
 /// Stable LSD radix sort on the key bits above the primitive (axis, position, type): 3 passes of
-/// 12 bits. Events are generated in primitive order, so the result is sorted by the whole key.
-void radixSortEvents(std::vector<Event>& events) {
-    std::vector<Event> tmp(events.size());
+/// 12 bits, from `src` to `dst` and back (`src` is scratch; the result lies in `dst`). Events are
+/// generated in primitive order, so the result is sorted by the whole key.
+void radixSortEventsInto(Event* src, Event* dst, size_t n) {
     constexpr int kBits = 12;
     constexpr size_t kBuckets = size_t(1) << kBits;
     std::vector<size_t> count(kBuckets);
+    Event* from = src;
+    Event* to = dst;
     for (int shift = kPrimBits; shift < 64; shift += kBits) {
         std::fill(count.begin(), count.end(), 0);
-        for (Event e : events) ++count[(e >> shift) & (kBuckets - 1)];
+        for (size_t i = 0; i < n; ++i) ++count[(from[i] >> shift) & (kBuckets - 1)];
         size_t sum = 0;
         for (size_t& c : count) {
-            size_t n = c;
+            size_t k = c;
             c = sum;
-            sum += n;
+            sum += k;
         }
-        for (Event e : events) tmp[count[(e >> shift) & (kBuckets - 1)]++] = e;
-        events.swap(tmp);
+        for (size_t i = 0; i < n; ++i) to[count[(from[i] >> shift) & (kBuckets - 1)]++] = from[i];
+        std::swap(from, to);
     }
+    static_assert((64 - kPrimBits) / kBits % 2 == 1, "an odd number of passes leaves the result in dst");
 }
 
 /// A node's sorted events. Not a std::vector: children's lists are written once by a merge, and
@@ -153,29 +160,58 @@ struct AxisSah {
 
 class KdBuilder {
 public:
-    KdBuilder(std::span<const Bounds3f> bounds, const KdClipFunction& clip, const KdConfig& config, KdTree& out)
-        : bounds_(bounds), clip_(clip), config_(config), out_(out), side_(bounds.size(), kBoth) {
+    /// `parallel`: build sibling subtrees of more than config.parallelAbove references as TBB tasks.
+    KdBuilder(std::span<const Bounds3f> bounds, const KdClipFunction& clip, const KdConfig& config, int depthLimit, bool parallel)
+        : bounds_(bounds), clip_(clip), config_(config), depthLimit_(depthLimit), parallel_(parallel),
+          scratch_([n = bounds.size()] { return Scratch(n); }) {
         invBlockSize_ = 1.f / float(std::max(1, config.sahBlockSize));
+    }
+
+    /// Builds the two children of the inner node `nodeIndex` (just appended to `out`) with
+    /// buildLeft(tree) and buildRight(tree), sets the node, and returns the children's costs.
+    /// Serially, the left subtree is appended to `out` and then the right one. In parallel, the
+    /// right subtree is built into a tree of its own while the left one grows `out`, and is then
+    /// appended with its node and reference indices moved: the nodes, leaves and statistics come out
+    /// exactly as in the serial order, whatever the number of threads (a subtree's build reads
+    /// nothing but its own input; the scratch buffers are per thread and hold nothing across the
+    /// recursion).
+    template <class BuildLeft, class BuildRight>
+    std::pair<double, double> buildChildren(KdTree& out, uint32_t nodeIndex, const SplitCandidate& split, size_t work,
+                                            BuildLeft&& buildLeft, BuildRight&& buildRight) {
+        double costL = 0.0, costR = 0.0;
+        uint32_t above;
+        if (parallel_ && work > config_.parallelAbove) {
+            KdTree right;
+            tbb::parallel_invoke([&] { costL = buildLeft(out); }, [&] { costR = buildRight(right); });
+            above = uint32_t(out.nodes.size());
+            appendSubtree(out, right);
+        } else {
+            costL = buildLeft(out);
+            above = uint32_t(out.nodes.size());
+            costR = buildRight(out);
+        }
+        out.nodes[nodeIndex] = KdNode::inner(split.axis, split.pos, above);
+        return {costL, costR};
     }
 
     /// Builds the subtree of `cell` from its sorted events (consumed); returns its expected cost
     /// relative to the cell's area (leaf: C_isect·B(N); inner: C_trav + P_L·C_L + P_R·C_R).
-    double build(EventList& events, uint32_t count, const Bounds3f& cell, int depth, int badRefines) {
-        out_.stats.maxDepth = std::max(out_.stats.maxDepth, depth);
+    double build(EventList& events, uint32_t count, const Bounds3f& cell, int depth, int badRefines, KdTree& out) {
+        out.stats.maxDepth = std::max(out.stats.maxDepth, depth);
         const float leafCost = config_.intersectionCost * blocks(count);
-        if (count == 0) return makeLeaf(events);
-        if (depth >= out_.stats.depthLimit) {
-            ++out_.stats.depthLimitHits;
-            return makeLeaf(events);
+        if (count == 0) return makeLeaf(events, out);
+        if (depth >= depthLimit_) {
+            ++out.stats.depthLimitHits;
+            return makeLeaf(events, out);
         }
         size_t segment[4];
-        out_.stats.eventsSwept += events.size;
+        out.stats.eventsSwept += events.size;
         SplitCandidate best = findSplit(events, count, cell, segment);
         // pbrt-v3's termination: a split worse than a leaf is allowed a few times along a path.
         bool bad = best.cost >= leafCost;
         if (bad) ++badRefines;
         if (best.axis < 0 || (bad && (badRefines > config_.maxBadRefines || (best.cost > 4.f * leafCost && count < 16))))
-            return makeLeaf(events);
+            return makeLeaf(events, out);
 
         // A bad refinement may be retracted: keep its primitives until the subtree is known.
         std::vector<uint32_t> retractPrims;
@@ -188,28 +224,28 @@ public:
         uint32_t leftCount = 0, rightCount = 0;
         split(events, segment, best, leftCell, rightCell, left, right, leftCount, rightCount);
 
-        uint32_t nodeIndex = uint32_t(out_.nodes.size());
-        size_t primMark = out_.primIndices.size();
-        size_t leavesMark = out_.stats.leaves, emptyMark = out_.stats.emptyLeaves, refMark = out_.stats.references;
-        size_t innerMark = out_.stats.innerNodes;
-        out_.nodes.emplace_back();
-        ++out_.stats.innerNodes;
-        double costL = build(left, leftCount, leftCell, depth + 1, badRefines);
-        uint32_t above = uint32_t(out_.nodes.size());
-        double costR = build(right, rightCount, rightCell, depth + 1, badRefines);
-        out_.nodes[nodeIndex] = KdNode::inner(best.axis, best.pos, above);
+        uint32_t nodeIndex = uint32_t(out.nodes.size());
+        size_t primMark = out.primIndices.size();
+        size_t leavesMark = out.stats.leaves, emptyMark = out.stats.emptyLeaves, refMark = out.stats.references;
+        size_t innerMark = out.stats.innerNodes;
+        out.nodes.emplace_back();
+        ++out.stats.innerNodes;
+        auto [costL, costR] = buildChildren(
+            out, nodeIndex, best, size_t(leftCount) + rightCount,
+            [&](KdTree& o) { return build(left, leftCount, leftCell, depth + 1, badRefines, o); },
+            [&](KdTree& o) { return build(right, rightCount, rightCell, depth + 1, badRefines, o); });
 
         double area = cell.surfaceArea();
         double cost = config_.traversalCost +
                       (leftCell.surfaceArea() * costL + rightCell.surfaceArea() * costR) / area;
         if (bad && cost >= leafCost) {
             // The refinement did not pay: retract the whole subtree into one leaf.
-            out_.nodes.resize(nodeIndex);
-            out_.primIndices.resize(primMark);
-            out_.stats.leaves = leavesMark, out_.stats.emptyLeaves = emptyMark, out_.stats.references = refMark;
-            out_.stats.innerNodes = innerMark;
-            ++out_.stats.retractions;
-            return emitLeaf(retractPrims);
+            out.nodes.resize(nodeIndex);
+            out.primIndices.resize(primMark);
+            out.stats.leaves = leavesMark, out.stats.emptyLeaves = emptyMark, out.stats.references = refMark;
+            out.stats.innerNodes = innerMark;
+            ++out.stats.retractions;
+            return emitLeaf(retractPrims, out);
         }
         return cost;
     }
@@ -223,20 +259,20 @@ public:
     /// Builds the subtree of `cell` over `refs` (consumed; sorted by primitive): binned SAH while
     /// the node holds more than `binnedAbove` references, then the exact event build. Returns the
     /// subtree's cost as build() does.
-    double buildBinned(std::vector<Ref>& refs, const Bounds3f& cell, int depth, int badRefines) {
+    double buildBinned(std::vector<Ref>& refs, const Bounds3f& cell, int depth, int badRefines, KdTree& out) {
         const uint32_t count = uint32_t(refs.size());
         SplitCandidate best;
-        if (count > config_.binnedAbove && depth < out_.stats.depthLimit) best = findBinnedSplit(refs, cell);
+        if (count > config_.binnedAbove && depth < depthLimit_) best = findBinnedSplit(refs, cell);
         if (best.axis < 0 || best.cost >= config_.intersectionCost * blocks(count)) {
             // Small enough, at the depth limit, or no binned plane pays: the exact sweep decides
             // (including whether this becomes a leaf, with the bad-refinement rules).
             EventList events;
             eventsOf(refs, events);
             std::vector<Ref>().swap(refs);
-            return build(events, count, cell, depth, badRefines);
+            return build(events, count, cell, depth, badRefines, out);
         }
-        out_.stats.maxDepth = std::max(out_.stats.maxDepth, depth);
-        out_.stats.refsBinned += count;
+        out.stats.maxDepth = std::max(out.stats.maxDepth, depth);
+        out.stats.refsBinned += count;
         Bounds3f leftCell = cell, rightCell = cell;
         leftCell.upper[best.axis] = best.pos;
         rightCell.lower[best.axis] = best.pos;
@@ -256,13 +292,13 @@ public:
             }
         }
         std::vector<Ref>().swap(refs);
-        uint32_t nodeIndex = uint32_t(out_.nodes.size());
-        out_.nodes.emplace_back();
-        ++out_.stats.innerNodes;
-        double costL = buildBinned(left, leftCell, depth + 1, badRefines);
-        uint32_t above = uint32_t(out_.nodes.size());
-        double costR = buildBinned(right, rightCell, depth + 1, badRefines);
-        out_.nodes[nodeIndex] = KdNode::inner(best.axis, best.pos, above);
+        uint32_t nodeIndex = uint32_t(out.nodes.size());
+        out.nodes.emplace_back();
+        ++out.stats.innerNodes;
+        auto [costL, costR] = buildChildren(
+            out, nodeIndex, best, left.size() + right.size(),
+            [&](KdTree& o) { return buildBinned(left, leftCell, depth + 1, badRefines, o); },
+            [&](KdTree& o) { return buildBinned(right, rightCell, depth + 1, badRefines, o); });
         return config_.traversalCost + (leftCell.surfaceArea() * costL + rightCell.surfaceArea() * costR) / cell.surfaceArea();
     }
 
@@ -280,23 +316,25 @@ private:
         if (!(area > 0.f)) return best;
         const float invArea = 1.f / area;
         const uint32_t count = uint32_t(refs.size());
-        binStart_.assign(size_t(3 * nb), 0u);
-        binEnd_.assign(size_t(3 * nb), 0u);
+        std::vector<uint32_t>& binStart = scratch_.local().binStart;
+        std::vector<uint32_t>& binEnd = scratch_.local().binEnd;
+        binStart.assign(size_t(3 * nb), 0u);
+        binEnd.assign(size_t(3 * nb), 0u);
         Vec3f scale;
         for (int a = 0; a < 3; ++a) scale[a] = d[a] > 0.f ? float(nb) / d[a] : 0.f;
         auto binOf = [&](float x, int a) { return std::clamp(int((x - cell.lower[a]) * scale[a]), 0, nb - 1); };
         for (const Ref& r : refs)
             for (int a = 0; a < 3; ++a) {
-                ++binStart_[size_t(a * nb + binOf(r.box.lower[a], a))];
-                ++binEnd_[size_t(a * nb + binOf(r.box.upper[a], a))];
+                ++binStart[size_t(a * nb + binOf(r.box.lower[a], a))];
+                ++binEnd[size_t(a * nb + binOf(r.box.upper[a], a))];
             }
         for (int a = 0; a < 3; ++a) {
             if (!(d[a] > 0.f)) continue;
             const AxisSah sah(cell, d, invArea, a, config_.emptyCutMinFraction);
             uint32_t nl = 0, nr = count;
             for (int k = 0; k + 1 < nb; ++k) {
-                nl += binStart_[size_t(a * nb + k)];
-                nr -= binEnd_[size_t(a * nb + k)];
+                nl += binStart[size_t(a * nb + k)];
+                nr -= binEnd[size_t(a * nb + k)];
                 const float p = sah.lo + d[a] * float(k + 1) / float(nb);
                 if (!(p > sah.lo && p < sah.hi)) continue;
                 float cost = sah.cost(p, nl, nr, blocks(nl), blocks(nr), config_);
@@ -307,15 +345,14 @@ private:
     }
 
     /// The sorted events of `refs` (sorted by primitive, so the stable radix sort on the upper key
-    /// bits sorts by the whole key).
-    static void eventsOf(const std::vector<Ref>& refs, EventList& events) {
-        std::vector<Event> list;
-        list.reserve(refs.size() * 6);
+    /// bits sorts by the whole key), generated into the thread's scratch and sorted into the list.
+    void eventsOf(const std::vector<Ref>& refs, EventList& events) {
+        std::vector<Event>& list = scratch_.local().unsorted;
+        list.clear();
         for (int a = 0; a < 3; ++a)
             for (const Ref& r : refs) appendAxisEvents(r.box, a, r.prim, list);
-        radixSortEvents(list);
         events.allocate(list.size());
-        std::copy(list.begin(), list.end(), events.data.get());
+        radixSortEventsInto(list.data(), events.data.get(), list.size());
     }
 
     /// B(n) = max(1, n / sahBlockSize) for n > 0: a leaf test costs one SIMD block at least, and
@@ -349,8 +386,14 @@ private:
                 sah = AxisSah(cell, d, invArea, a, config_.emptyCutMinFraction);
             }
             uint64_t plane = eventPlane(e);
-            uint32_t typeCount[3] = {0, 0, 0};
-            while (i < n && eventPlane(events[i]) == plane) ++typeCount[eventType(events[i++])];
+            // Counts in registers: an array indexed by the type made every event a load-add-store
+            // whose store the next event's load waited for (a sixth of the build's time).
+            uint32_t ends = 0, planars = 0, starts = 0;
+            for (; i < n && eventPlane(events[i]) == plane; ++i) {
+                const uint32_t type = eventType(events[i]);
+                ends += type == kEnd, planars += type == kPlanar, starts += type == kStart;
+            }
+            const uint32_t typeCount[3] = {ends, planars, starts};
             uint32_t np = typeCount[kPlanar];
             nr -= typeCount[kPlanar] + typeCount[kEnd];
             float p = eventPos(e);
@@ -373,6 +416,7 @@ private:
     void split(EventList& events, const size_t segment[4], const SplitCandidate& s, const Bounds3f& leftCell,
                const Bounds3f& rightCell, EventList& left, EventList& right, uint32_t& leftCount,
                uint32_t& rightCount) {
+        Scratch& sc = scratch_.local();
         const size_t begin = segment[s.axis], end = segment[s.axis + 1];
         // One pass over the split axis's events, in position order (W&H Algorithm 5 folded): a start
         // before the plane marks its primitive as straddling until its end event, if also at or
@@ -380,7 +424,7 @@ private:
         // events go by position, those in the plane by the SAH's choice. Ends after the plane leave
         // the mark alone (their primitive straddles or was marked right by its start).
         const uint32_t splitKey = sortableBits(s.pos);
-        uint8_t* side = side_.data();
+        uint8_t* side = sc.side.data();
         const uint8_t planarInPlane = s.planarLeft ? kLeftOnly : kRightOnly;
         for (size_t i = begin; i < end; ++i) {
             Event e = events[i];
@@ -391,23 +435,23 @@ private:
             else mark = type == kEnd ? side[prim] : uint8_t(kRightOnly);
             side[prim] = mark;
         }
-        straddlers_.clear();
+        sc.straddlers.clear();
         leftCount = rightCount = 0;
         for (size_t i = begin; i < end; ++i) {
             Event e = events[i];
             if (eventType(e) == kEnd) continue;
             uint32_t prim = eventPrim(e);
-            Side side = Side(side_[prim]);
+            Side side = Side(sc.side[prim]);
             if (side == kLeftOnly) ++leftCount;
             else if (side == kRightOnly) ++rightCount;
-            else straddlers_.push_back(prim);
+            else sc.straddlers.push_back(prim);
         }
         // Stable partition without branches: every event is written to both lists, and only the
         // cursor of its side advances (straddlers advance neither: their events are regenerated).
-        if (keptLeft_.size() < events.size) keptLeft_.resize(events.size), keptRight_.resize(events.size);
+        if (sc.keptLeft.size() < events.size) sc.keptLeft.resize(events.size), sc.keptRight.resize(events.size);
         size_t nLeft = 0, nRight = 0;
-        Event* keptL = keptLeft_.data();
-        Event* keptR = keptRight_.data();
+        Event* keptL = sc.keptLeft.data();
+        Event* keptR = sc.keptRight.data();
         for (Event e : events) {
             uint8_t sd = side[eventPrim(e)];
             keptL[nLeft] = e;
@@ -417,18 +461,18 @@ private:
         }
         events.release();  // the parent's list is no longer needed
 
-        newLeft_.clear(), newRight_.clear();
-        for (uint32_t prim : straddlers_) {
+        sc.newLeft.clear(), sc.newRight.clear();
+        for (uint32_t prim : sc.straddlers) {
             Bounds3f bl = clipped(prim, leftCell), br = clipped(prim, rightCell);
-            if (!bl.empty()) appendEvents(bl, prim, newLeft_), ++leftCount;
-            if (!br.empty()) appendEvents(br, prim, newRight_), ++rightCount;
+            if (!bl.empty()) appendEvents(bl, prim, sc.newLeft), ++leftCount;
+            if (!br.empty()) appendEvents(br, prim, sc.newRight), ++rightCount;
         }
-        std::sort(newLeft_.begin(), newLeft_.end());
-        std::sort(newRight_.begin(), newRight_.end());
-        left.allocate(nLeft + newLeft_.size());
-        std::merge(keptL, keptL + nLeft, newLeft_.begin(), newLeft_.end(), left.data.get());
-        right.allocate(nRight + newRight_.size());
-        std::merge(keptR, keptR + nRight, newRight_.begin(), newRight_.end(), right.data.get());
+        std::sort(sc.newLeft.begin(), sc.newLeft.end());
+        std::sort(sc.newRight.begin(), sc.newRight.end());
+        left.allocate(nLeft + sc.newLeft.size());
+        std::merge(keptL, keptL + nLeft, sc.newLeft.begin(), sc.newLeft.end(), left.data.get());
+        right.allocate(nRight + sc.newRight.size());
+        std::merge(keptR, keptR + nRight, sc.newRight.begin(), sc.newRight.end(), right.data.get());
     }
 
     /// The primitive clipped to the cell (perfect split), always within the cell.
@@ -446,32 +490,59 @@ private:
         return prims;
     }
 
-    double makeLeaf(EventList& events) {
+    double makeLeaf(EventList& events, KdTree& out) {
         std::vector<uint32_t> prims = primsOf(events);
         events.release();
-        return emitLeaf(prims);
+        return emitLeaf(prims, out);
     }
 
-    double emitLeaf(std::vector<uint32_t>& prims) {
+    double emitLeaf(std::vector<uint32_t>& prims, KdTree& out) {
         // Primitive order inside a leaf: ascending ids, so leaf blocks do not depend on event order.
         std::sort(prims.begin(), prims.end());
-        out_.nodes.push_back(KdNode::leaf(uint32_t(out_.primIndices.size()), uint32_t(prims.size())));
-        out_.primIndices.insert(out_.primIndices.end(), prims.begin(), prims.end());
-        ++out_.stats.leaves;
-        out_.stats.references += prims.size();
-        if (prims.empty()) ++out_.stats.emptyLeaves;
+        out.nodes.push_back(KdNode::leaf(uint32_t(out.primIndices.size()), uint32_t(prims.size())));
+        out.primIndices.insert(out.primIndices.end(), prims.begin(), prims.end());
+        ++out.stats.leaves;
+        out.stats.references += prims.size();
+        if (prims.empty()) ++out.stats.emptyLeaves;
         return config_.intersectionCost * blocks(uint32_t(prims.size()));
     }
+
+    /// Appends a subtree built on its own (node 0 its root) to `out`, moving its child and
+    /// reference indices by the nodes and references already in `out`.
+    static void appendSubtree(KdTree& out, const KdTree& sub) {
+        const uint32_t nodeBase = uint32_t(out.nodes.size()), primBase = uint32_t(out.primIndices.size());
+        out.nodes.reserve(out.nodes.size() + sub.nodes.size());
+        for (KdNode n : sub.nodes) {
+            if (n.isLeaf()) n.word0 += primBase;
+            else n.word1 += nodeBase << 2;
+            out.nodes.push_back(n);
+        }
+        out.primIndices.insert(out.primIndices.end(), sub.primIndices.begin(), sub.primIndices.end());
+        KdBuildStats& s = out.stats;
+        const KdBuildStats& t = sub.stats;
+        s.innerNodes += t.innerNodes, s.leaves += t.leaves, s.emptyLeaves += t.emptyLeaves, s.references += t.references;
+        s.depthLimitHits += t.depthLimitHits, s.retractions += t.retractions;
+        s.eventsSwept += t.eventsSwept, s.refsBinned += t.refsBinned;
+        s.maxDepth = std::max(s.maxDepth, t.maxDepth);
+    }
+
+    /// Per-thread buffers of one node's step (split(), findBinnedSplit()): nothing in them lives
+    /// across a recursive call, so a thread may switch to another subtree while it waits.
+    struct Scratch {
+        explicit Scratch(size_t primitives) : side(primitives, kBoth) {}
+        std::vector<uint8_t> side;  ///< per primitive: its side of the plane being split
+        std::vector<uint32_t> straddlers;
+        std::vector<Event> keptLeft, keptRight, newLeft, newRight, unsorted;
+        std::vector<uint32_t> binStart, binEnd;
+    };
 
     std::span<const Bounds3f> bounds_;
     const KdClipFunction& clip_;
     KdConfig config_;
-    KdTree& out_;
+    int depthLimit_ = 0;
+    bool parallel_ = false;
     float invBlockSize_ = 1.f;
-    std::vector<uint8_t> side_;
-    std::vector<uint32_t> straddlers_;
-    std::vector<Event> keptLeft_, keptRight_, newLeft_, newRight_;
-    std::vector<uint32_t> binStart_, binEnd_;
+    tbb::enumerable_thread_specific<Scratch> scratch_;
 };
 
 }  // namespace
@@ -488,23 +559,25 @@ KdTree buildKdTree(std::span<const Bounds3f> primBounds, const KdClipFunction& c
     tree.stats.depthLimit = std::clamp(limit, 0, kKdMaxDepth);
     if (n == 0) return tree;
 
-    KdBuilder builder(primBounds, clip, config, tree);
+    // Subtrees are built as TBB tasks when the caller's arena has more than one thread (the tree is
+    // the same either way, KdBuilder::buildChildren).
+    const bool parallel = config.parallelAbove > 0 && tbb::this_task_arena::max_concurrency() > 1;
+    KdBuilder builder(primBounds, clip, config, tree.stats.depthLimit, parallel);
     if (config.binnedAbove > 0 && n > config.binnedAbove) {
         std::vector<KdBuilder::Ref> refs(n);
         for (uint32_t i = 0; i < n; ++i) refs[i] = {primBounds[i], i};
-        tree.stats.sahCost = builder.buildBinned(refs, tree.bounds, 0, 0);
+        tree.stats.sahCost = builder.buildBinned(refs, tree.bounds, 0, 0, tree);
     } else {
         std::vector<Event> events;
         events.reserve(6 * n);
         // Per axis, in primitive order: the radix sort is stable, so equal keys stay by primitive.
         for (int a = 0; a < 3; ++a)
             for (uint32_t i = 0; i < n; ++i) appendAxisEvents(primBounds[i], a, i, events);
-        radixSortEvents(events);
         EventList root;
         root.allocate(events.size());
-        std::copy(events.begin(), events.end(), root.data.get());
+        radixSortEventsInto(events.data(), root.data.get(), events.size());
         std::vector<Event>().swap(events);
-        tree.stats.sahCost = builder.build(root, uint32_t(n), tree.bounds, 0, 0);
+        tree.stats.sahCost = builder.build(root, uint32_t(n), tree.bounds, 0, 0, tree);
     }
     tree.nodes.shrink_to_fit();
     tree.primIndices.shrink_to_fit();

@@ -3,7 +3,7 @@
 /// "TA_B^rec" family (Havran 2000, thesis Section 4; pbrt-v3; Wald's thesis Section 7.2) with the
 /// three binary levels of a treelet decided in one 8-lane step. Each lane (a slot: up to three
 /// planes with a side each) clips the current segment; the entered slots are visited in the binary
-/// traversal's near-first order (closest-hit) or in any order (any-hit), the others pushed. The
+/// traversal's near-first order (closest-hit) or far-first (any-hit), the others pushed. The
 /// closest-hit kernel drops every pushed segment that starts beyond its hit; the any-hit kernel
 /// stops at the first hit. Scenes with cut-out triangles (alpha masks) run a second instantiation of
 /// both (kMasked) that drops the hits the masks drop.
@@ -207,7 +207,14 @@ __attribute__((noinline)) TriangleCandidate KdTreeAccel::filterMaskedLanes(const
 /// starts beyond it is dropped when popped, and in near-first order that is everything behind the
 /// hit's cell. (An exact exit per segment, for the classic "hit inside this leaf" test, cost an
 /// extra permute, product and min per level in every node.)
-template <bool kAvx, bool kCoherent, bool kMasked>
+/// kAnyHit: the any-hit kernel (occluded), returning at the first hit, and visiting the entered
+/// slots *far-first*: a shadow ray starts on a surface, whose finely cut cells around the origin
+/// hold the surface itself and its neighbours, which rarely occlude; from the far (light) end it
+/// meets an occluder, when there is one, before paying for them. Against a kernel that pushed all
+/// entered slots branch-free and took them in slot order: Conference shadow rays +35% (0.46× →
+/// 0.62× Embree), Sibenik and Sponza −2–3%, dragon res2 ±1% (`bench-accel --rays shadow`, CPU clock,
+/// two processes each); near-first was 10–30% slower than either.
+template <bool kAvx, bool kCoherent, bool kMasked, bool kAnyHit>
 TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
     WideRay wideRay;
     Segment seg;
@@ -241,7 +248,7 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                     // kernels return the same record.
                     const int lo = __builtin_ctz(mask), hi = 31 - __builtin_clz(mask);
                     if (!(mask & ~((1u << lo) | (1u << hi)))) {
-                        const bool swap = wideRay.nearFirstKey(node, hi) < wideRay.nearFirstKey(node, lo);
+                        const bool swap = (wideRay.nearFirstKey(node, hi) < wideRay.nearFirstKey(node, lo)) != kAnyHit;
                         const int near = swap ? hi : lo, far = swap ? lo : hi;
                         stack[sp] = {node.child[far], {entry[far], exit[far]}};
                         sp += lo != hi;
@@ -263,6 +270,18 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                         slotOfKey[k] = i;
                         byKey |= 1u << k;
                     }
+                    if constexpr (kAnyHit) {
+                        // Far-first: the last slot along the ray first, the nearest pushed first.
+                        const int last = 31 - __builtin_clz(byKey);
+                        nearest = slotOfKey[last];
+                        byKey ^= 1u << last;
+                        while (byKey) {
+                            int k = __builtin_ctz(byKey);
+                            byKey &= byKey - 1;
+                            int i = slotOfKey[k];
+                            stack[sp++] = {node.child[i], {entry[i], exit[i]}};
+                        }
+                    } else {
                     nearest = slotOfKey[__builtin_ctz(byKey)];
                     byKey &= byKey - 1;
                     while (byKey) {
@@ -270,6 +289,7 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                         byKey ^= 1u << k;
                         int i = slotOfKey[k];
                         stack[sp++] = {node.child[i], {entry[i], exit[i]}};
+                    }
                     }
                 }
                 ref = node.child[nearest];
@@ -281,8 +301,14 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
             if (!leaf.mixed) {
                 const TriangleBlock* blocks = triangles_.data() + leaf.first;
                 for (uint32_t b = 0; b < leaf.count; ++b) {
-                    TriangleCandidate c = intersectTriangles<8, false>(triRay, blocks[b].p, tHit);
+                    TriangleCandidate c = intersectTriangles<8, kAnyHit>(triRay, blocks[b].p, tHit);
                     if (c.lane < 0) continue;
+                    if constexpr (kAnyHit) {
+                        if constexpr (kMasked) {
+                            if ((ref & kKdMaskedLeafBit) && filterMaskedLanes(triRay, leaf.first + b, tHit, c).lane < 0) continue;
+                        }
+                        return true;
+                    }
                     // A cut-out triangle's hit counts only where its alpha mask keeps it; if not,
                     // the block's next-nearest lane may still be the answer.
                     if constexpr (kMasked) {
@@ -294,7 +320,8 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
                     tHit = c.t, bestU = c.u, bestV = c.v;
                     bestBlock = &blocks[b], bestLane = c.lane;
                 }
-            } else if (intersectMixedLeaf<false, kMasked>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, tHit, bestMixed)) {
+            } else if (intersectMixedLeaf<kAnyHit, kMasked>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, tHit, bestMixed)) {
+                if constexpr (kAnyHit) return true;
                 bestBlock = nullptr;
             }
         }
@@ -307,6 +334,7 @@ TESSERA_INLINE bool KdTreeAccel::intersectImpl(const Ray& ray, Hit& hit) const {
         seg = stack[sp].seg;
     }
 done:
+    if constexpr (kAnyHit) return false;
     if (bestBlock) {
         const PrimRef id = blockIds_[size_t(bestBlock - triangles_.data()) * kLanes + size_t(bestLane)];
         triangleHitRecord(bestBlock->p, bestLane, tHit, bestU, bestV, id, hit);
@@ -319,77 +347,21 @@ done:
     return false;
 }
 
-/// The any-hit kernel: no order among the entered slots, so a node's step needs no branch on how
-/// many it entered: all are pushed at once (compacted by compactIndices, onto a
-/// stack of structure-of-arrays) and the top is popped.
-template <bool kAvx, bool kMasked>
-TESSERA_INLINE bool KdTreeAccel::occludedImpl(const Ray& ray) const {
-    WideRay wideRay;
-    Segment seg;
-    if (wide_.empty() || !startRay(ray, rootCell_, sceneMagnitude_, wideRay, seg)) return false;
-    TriRay8 triRay(ray);
-    const float tHit = ray.tMax;
-
-    // 8 entries of slack: every push writes a whole vector.
-    alignas(32) uint32_t refs[kStackSize + 8];
-    alignas(32) float mins[kStackSize + 8], maxs[kStackSize + 8];
-    int sp = 0;
-    uint32_t ref = 0;
-    const char* wideBase = reinterpret_cast<const char*>(wide_.data());
-    while (true) {
-        if (!(ref & kKdLeafBit)) {
-            const KdWideNode& node = *reinterpret_cast<const KdWideNode*>(wideBase + ref);
-            Vf8 entry, exit;
-            uint32_t mask = enterSlots<kAvx>(node, wideRay, seg, entry, exit);
-            const Vi8 order = compactIndices(mask);
-            store8(refs + sp, permute8(load8i(node.child), order));
-            store8(mins + sp, permute8(entry, order));
-            store8(maxs + sp, permute8(exit, order));
-            sp += __builtin_popcount(mask);
-            if (mask) {
-                // The top entry is the highest entered slot: its reference straight from the node
-                // (a load after a bit scan) rather than through the stack (table load, shuffles,
-                // store and reload between this node and the next one's address).
-                const int top = 31 - __builtin_clz(mask);
-                --sp;
-                ref = node.child[top];
-                seg = {mins[sp], maxs[sp]};
-                continue;
-            }
-        } else {
-            const LeafSpan leaf = leafSpan(ref);
-            if (!leaf.mixed) {
-                const TriangleBlock* blocks = triangles_.data() + leaf.first;
-                for (uint32_t b = 0; b < leaf.count; ++b) {
-                    TriangleCandidate c = intersectTriangles<8, true>(triRay, blocks[b].p, tHit);
-                    if (c.lane < 0) continue;
-                    if constexpr (kMasked) {
-                        if ((ref & kKdMaskedLeafBit) && filterMaskedLanes(triRay, leaf.first + b, tHit, c).lane < 0) continue;
-                    }
-                    return true;
-                }
-            } else {
-                MixedCandidate unused;
-                float t = tHit;
-                if (intersectMixedLeaf<true, kMasked>(geometry_, ray, &mixedPrims_[leaf.first], leaf.count, t, unused)) return true;
-            }
-        }
-        if (sp == 0) return false;
-        --sp;
-        ref = refs[sp];
-        seg = {mins[sp], maxs[sp]};
-    }
-}
-
 #if defined(TESSERA_X86)
-__attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true, false, false>(ray, hit); }
-__attribute__((target("avx2"))) bool KdTreeAccel::intersectCoherentAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true, true, false>(ray, hit); }
-__attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const { return occludedImpl<true, false>(ray); }
+__attribute__((target("avx2"))) bool KdTreeAccel::intersectAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true, false, false, false>(ray, hit); }
+__attribute__((target("avx2"))) bool KdTreeAccel::intersectCoherentAvx2(const Ray& ray, Hit& hit) const { return intersectImpl<true, true, false, false>(ray, hit); }
+__attribute__((target("avx2"))) bool KdTreeAccel::occludedAvx2(const Ray& ray) const {
+    Hit unused;
+    return intersectImpl<true, false, false, true>(ray, unused);
+}
 template <bool kCoherent>
 __attribute__((target("avx2"))) bool KdTreeAccel::intersectMaskedAvx2(const Ray& ray, Hit& hit) const {
-    return intersectImpl<true, kCoherent, true>(ray, hit);
+    return intersectImpl<true, kCoherent, true, false>(ray, hit);
 }
-__attribute__((target("avx2"))) bool KdTreeAccel::occludedMaskedAvx2(const Ray& ray) const { return occludedImpl<true, true>(ray); }
+__attribute__((target("avx2"))) bool KdTreeAccel::occludedMaskedAvx2(const Ray& ray) const {
+    Hit unused;
+    return intersectImpl<true, false, true, true>(ray, unused);
+}
 #endif
 
 template <bool kCoherent>
@@ -397,14 +369,15 @@ __attribute__((noinline)) bool KdTreeAccel::intersectMasked(const Ray& ray, Hit&
 #if defined(TESSERA_X86)
     if (isa_.avx2()) return intersectMaskedAvx2<kCoherent>(ray, hit);
 #endif
-    return intersectImpl<false, kCoherent, true>(ray, hit);
+    return intersectImpl<false, kCoherent, true, false>(ray, hit);
 }
 
 __attribute__((noinline)) bool KdTreeAccel::occludedMasked(const Ray& ray) const {
 #if defined(TESSERA_X86)
     if (isa_.avx2()) return occludedMaskedAvx2(ray);
 #endif
-    return occludedImpl<false, true>(ray);
+    Hit unused;
+    return intersectImpl<false, false, true, true>(ray, unused);
 }
 
 bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const {
@@ -412,7 +385,7 @@ bool KdTreeAccel::intersect(const Ray& ray, Hit& hit) const {
 #if defined(TESSERA_X86)
     if (isa_.avx2()) return intersectAvx2(ray, hit);
 #endif
-    return intersectImpl<false, false, false>(ray, hit);
+    return intersectImpl<false, false, false, false>(ray, hit);
 }
 
 bool KdTreeAccel::intersectCoherent(const Ray& ray, Hit& hit) const {
@@ -420,7 +393,7 @@ bool KdTreeAccel::intersectCoherent(const Ray& ray, Hit& hit) const {
 #if defined(TESSERA_X86)
     if (isa_.avx2()) return intersectCoherentAvx2(ray, hit);
 #endif
-    return intersectImpl<false, true, false>(ray, hit);
+    return intersectImpl<false, true, false, false>(ray, hit);
 }
 
 bool KdTreeAccel::occluded(const Ray& ray) const {
@@ -428,7 +401,8 @@ bool KdTreeAccel::occluded(const Ray& ray) const {
 #if defined(TESSERA_X86)
     if (isa_.avx2()) return occludedAvx2(ray);
 #endif
-    return occludedImpl<false, false>(ray);
+    Hit unused;
+    return intersectImpl<false, false, false, true>(ray, unused);
 }
 
 }  // namespace tessera

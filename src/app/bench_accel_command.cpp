@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <atomic>
 #include <iomanip>
@@ -17,6 +18,7 @@
 
 #include "accel/bvh_accel.h"
 #include "accel/kdtree_accel.h"
+#include "app/bench_accel_processes.h"
 #include "app/commands.h"
 #include "core/error.h"
 #include "geometry/instances.h"
@@ -70,13 +72,47 @@ inline bool trace(const Accel& accel, const Ray& r, Query q, Hit& h) {
     return false;
 }
 
-/// Seconds to trace all rays; `checksum` keeps the work.
-double traceSeconds(const Accel& accel, const std::vector<Ray>& rays, Query query, int threads, size_t& checksum) {
+/// One thread's loop over all rays (out of line, so that its frame and the traversal's stack lie
+/// where the caller put the stack pointer).
+__attribute__((noinline)) size_t traceAll(const Accel& accel, const std::vector<Ray>& rays, Query query) {
+    size_t hits = 0;
+    Hit h;
+    for (const Ray& r : rays) hits += trace(accel, r, query, h);
+    return hits;
+}
+
+/// traceAll with the stack pointer moved, first, to `pageOffset` bytes into a 4 KiB page (a layout
+/// experiment: the traversal's stack then has the same page offset in every process, where ASLR
+/// otherwise draws it afresh at each start); a negative offset leaves the stack where it is.
+size_t traceAllAtStackOffset(const Accel& accel, const std::vector<Ray>& rays, Query query, int pageOffset) {
+    if (pageOffset < 0) return traceAll(accel, rays, query);
+    char probe = 0;
+    const uintptr_t sp = reinterpret_cast<uintptr_t>(&probe);
+    const size_t shift = (sp - uintptr_t(pageOffset)) & 4095u;
+    volatile char* pad = static_cast<char*>(__builtin_alloca(shift + 64));
+    pad[0] = probe;  // keeps the allocation
+    return traceAll(accel, rays, query);
+}
+
+/// Seconds of CPU time of `clock` (CLOCK_THREAD_CPUTIME_ID, CLOCK_PROCESS_CPUTIME_ID).
+double cpuSeconds(clockid_t clock) {
+    timespec ts{};
+    clock_gettime(clock, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+/// Seconds to trace all rays; `checksum` keeps the work. `cpuClock` (one thread only): the
+/// thread's CPU time instead of the wall clock, so that time the thread spends descheduled on a
+/// shared machine does not count.
+double traceSeconds(const Accel& accel, const std::vector<Ray>& rays, Query query, int threads, size_t& checksum,
+                    int stackPageOffset, bool cpuClock) {
     auto start = std::chrono::steady_clock::now();
     size_t hits = 0;
     if (threads == 1) {
-        Hit h;
-        for (const Ray& r : rays) hits += trace(accel, r, query, h);
+        const double cpuStart = cpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+        hits = traceAllAtStackOffset(accel, rays, query, stackPageOffset);
+        checksum += hits;
+        if (cpuClock) return cpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpuStart;
     } else {
         std::atomic<size_t> total{0};
         auto body = [&] {
@@ -90,8 +126,8 @@ double traceSeconds(const Accel& accel, const std::vector<Ray>& rays, Query quer
         if (threads > 0) tbb::task_arena(threads).execute(body);
         else body();
         hits = total;
+        checksum += hits;
     }
-    checksum += hits;
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -121,7 +157,7 @@ nlohmann::json kdConfigJson(const KdConfig& c) {
 /// `--complexity`: build times only, normalised by N·log2 N (Wald & Havran 2006 claim O(N log N) for
 /// the k-d tree build: the ratio should stay about constant as N grows).
 int runComplexity(const std::vector<std::string>& inputs, const std::vector<std::string>& accels, const AccelOptions& options,
-                  int repeat, bool json) {
+                  int repeat, bool json, bool cpuClock) {
     nlohmann::json rows = nlohmann::json::array();
     if (!json) std::cout << "structure  primitives  build s (median of " << repeat << ")  ns / (N log2 N)\n";
     for (const std::string& input : inputs) {
@@ -133,8 +169,9 @@ int runComplexity(const std::vector<std::string>& inputs, const std::vector<std:
             std::vector<double> seconds;
             nlohmann::json kdStats;
             for (int rep = 0; rep < repeat; ++rep) {
+                const double cpuStart = cpuSeconds(CLOCK_PROCESS_CPUTIME_ID);
                 auto accel = createAccel(name, g, options);
-                seconds.push_back(accel->stats().buildSeconds);
+                seconds.push_back(cpuClock ? cpuSeconds(CLOCK_PROCESS_CPUTIME_ID) - cpuStart : accel->stats().buildSeconds);
                 kdStats = kdStatsJson(*accel);
             }
             double s = median(seconds);
@@ -154,7 +191,11 @@ int runComplexity(const std::vector<std::string>& inputs, const std::vector<std:
 struct BenchOptions {
     std::vector<std::string> inputs;
     std::string accels = "bvh,embree", rays = "primary,diffuse,shadow";
-    int threads = 1, repeat = 5, resolution = 1024;
+    int threads = 1, repeat = 5, resolution = 1024, processes = 1, stackPageOffset = -1;
+    std::string clock = "cpu";
+    /// Timings by CPU time: asked for, and meaningful (one thread).
+    bool cpuClock() const { return clock == "cpu" && threads == 1; }
+    double agreeWithin = 0.05;
     uint64_t seed = 1;
     bool json = false, complexity = false, flattened = false;
 };
@@ -242,18 +283,22 @@ nlohmann::json benchInput(const std::string& input, const std::vector<std::strin
     size_t checksum = 0;
     for (int rep = 0; rep < opt.repeat; ++rep) {
         for (const Run& run : runs) {  // interleaved: each repeat runs every structure
+            const double cpuStart = cpuSeconds(CLOCK_PROCESS_CPUTIME_ID);
             auto accel = createAccel(run.structure, *run.geometry, options);
+            const double buildCpu = cpuSeconds(CLOCK_PROCESS_CPUTIME_ID) - cpuStart;
             Measured& m = measured[run.label];
             m.geometryBytes = geometryBytes(*run.geometry);
             m.instanced = !run.geometry->instances.empty();
             m.flattened = run.geometry == &flat;
             m.stats = accel->stats();
             m.kdStats = kdStatsJson(*accel);
-            m.buildSeconds.push_back(accel->stats().buildSeconds);
+            // The CPU clock counts the whole createAccel (geometry gathering included) of all the
+            // process's threads: with one thread, what the build cost; several threads' work adds up.
+            m.buildSeconds.push_back(opt.cpuClock() ? buildCpu : accel->stats().buildSeconds);
             for (const std::string& kind : kinds) {
                 const std::vector<Ray>& set = rays.get(kind);
                 Query query = kind == "shadow" ? Query::Any : kind == "primary" ? Query::ClosestCoherent : Query::Closest;
-                double s = traceSeconds(*accel, set, query, opt.threads, checksum);
+                double s = traceSeconds(*accel, set, query, opt.threads, checksum, opt.stackPageOffset, opt.cpuClock());
                 m.mrays[kind].push_back(double(set.size()) / s * 1e-6);
             }
         }
@@ -294,17 +339,48 @@ Runner addBenchAccelCommand(CLI::App& app) {
     cmd->add_flag("--flattened", opt->flattened,
                   "instanced scenes: also every structure over the flattened copy (NAME-flat), for memory and speed");
     cmd->add_flag("--complexity", opt->complexity, "build times only, with build time / (N log2 N) per input");
+    cmd->add_option("--processes", opt->processes,
+                    "run the benchmark in this many fresh processes, one after another, and report every figure as "
+                    "the median over them with its range and spread (a process's memory layout can slow one ray kind "
+                    "by 25-40% for its whole life)")
+        ->capture_default_str();
+    cmd->add_option("--clock", opt->clock,
+                    "cpu: with --threads 1, time builds by the process's CPU time and tracing by the thread's, so "
+                    "that time spent descheduled on a shared machine does not count; wall: the wall clock (always "
+                    "with several threads)")
+        ->check(CLI::IsMember({"cpu", "wall"}))
+        ->capture_default_str();
+    cmd->add_option("--stack-page-offset", opt->stackPageOffset,
+                    "layout experiment (one thread): trace with the stack pointer at this byte offset into a 4 KiB "
+                    "page, the same in every process (-1: where ASLR put it)")
+        ->capture_default_str();
+    cmd->add_option("--agree-within", opt->agreeWithin,
+                    "with --processes: the largest spread (max - min) / median a ratio to embree may have to count as "
+                    "reproducible (reported)")
+        ->capture_default_str();
     return [opt] {
         std::vector<std::string> accels = splitList(opt->accels), kinds = splitList(opt->rays);
         for (const std::string& k : kinds)
             if (k != "primary" && k != "diffuse" && k != "shadow") throw InputError("--rays: unknown kind '" + k + "'");
         AccelOptions options;
         options.threads = opt->threads;
-        if (opt->complexity) return runComplexity(opt->inputs, accels, options, opt->repeat, opt->json);
-        nlohmann::json report = {{"threads", opt->threads}, {"repeat", opt->repeat}, {"resolution", opt->resolution},
+        if (opt->processes > 1) {
+            if (opt->complexity) throw InputError("bench-accel: --processes does not apply to --complexity");
+            std::vector<std::string> args{"bench-accel", "--json", "--accel", opt->accels, "--rays", opt->rays,
+                                          "--threads", std::to_string(opt->threads), "--repeat", std::to_string(opt->repeat),
+                                          "--resolution", std::to_string(opt->resolution), "--seed", std::to_string(opt->seed)};
+            if (opt->flattened) args.push_back("--flattened");
+            args.insert(args.end(), {"--clock", opt->clock});
+            if (opt->stackPageOffset >= 0) args.insert(args.end(), {"--stack-page-offset", std::to_string(opt->stackPageOffset)});
+            args.insert(args.end(), opt->inputs.begin(), opt->inputs.end());
+            return runBenchProcesses(args, opt->processes, opt->agreeWithin, opt->json);
+        }
+        if (opt->complexity) return runComplexity(opt->inputs, accels, options, opt->repeat, opt->json, opt->cpuClock());
+        nlohmann::json report = {{"threads", opt->threads}, {"repeat", opt->repeat}, {"resolution", opt->resolution}, {"stackPageOffset", opt->stackPageOffset},
+                                 {"clock", opt->cpuClock() ? "cpu" : "wall"},
                                  {"bvhConfig", configJson(BvhConfig{})},
                                  {"kdConfig", kdConfigJson(KdConfig{})}, {"inputs", nlohmann::json::array()}};
-        if (!opt->json) std::cout << "config: threads " << opt->threads << ", repeat " << opt->repeat << ", bvh "
+        if (!opt->json) std::cout << "config: threads " << opt->threads << ", repeat " << opt->repeat << ", clock " << (opt->cpuClock() ? "cpu" : "wall") << ", bvh "
                                   << configJson(BvhConfig{}).dump() << ", kdtree "
                                   << kdConfigJson(KdConfig{}).dump() << "\n";
         for (const std::string& input : opt->inputs)
