@@ -125,6 +125,7 @@ bool checkPath(const RenderContext& ctx, const std::vector<PathVertex>& camPath,
                 v.pdfFwdA = float(pE[size_t(i)]), v.pdfRevA = float(pL[size_t(i)]);
                 zs.push_back(v);
             }
+            bdptMisPrefixes(ctx, ys, zs, h);
             float w = bdptStrategyWeight(ctx, ys, zs, s, k + 1 - s, s > 0 ? &ys.back() : nullptr, &zs.back(), h);
             double expected = p[size_t(s)] / sumP;
             EXPECT_NEAR(w, expected, 2e-3 * expected + 1e-6) << "strategy s = " << s << " of a path of " << k + 1 << " vertices";

@@ -81,6 +81,7 @@ bool checkWeightsOfPath(const RenderContext& ctx, const std::vector<PathVertex>&
         for (int s = lightIsDelta ? 1 : 0; s <= k; ++s) {
             int t = k + 1 - s;
             splitPath(x, pL, pE, s, lightMaterial, ys, zs);
+            bdptMisPrefixes(ctx, ys, zs, h);
             float w = bdptStrategyWeight(ctx, ys, zs, s, t, s > 0 ? &ys.back() : nullptr, &zs.back(), h);
             expectRelNear(w, ps[size_t(s)] / sumPs, 2e-3, "weight of (s=" + std::to_string(s) + ", t=" + std::to_string(t) + ")");
             sumW += w;

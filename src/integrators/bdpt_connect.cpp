@@ -1,8 +1,5 @@
 #include "integrators/bdpt_connect.h"
 
-#include <cstddef>
-#include <memory>
-
 #include "integrators/next_event.h"
 
 namespace tessera {
@@ -25,25 +22,6 @@ void attenuateEdge(const RenderContext& ctx, Rgb& L, const PathVertex& a, const 
     if (attenuates) L *= T;
 }
 
-/// Fixed-capacity scratch for the MIS densities, growing on the heap only for very long paths.
-/// Only the n entries in use are constructed: initialising the whole inline array was most of the
-/// cost of a weight.
-class MisScratch {
-public:
-    MisScratch(const MisScratch&) = delete;
-    explicit MisScratch(size_t n) : heap_(n > kInline ? n : 0) {
-        data_ = n > kInline ? heap_.data() : std::uninitialized_default_construct_n(reinterpret_cast<MisVertex*>(inline_), n) - n;
-    }
-    MisVertex& operator[](size_t i) { return data_[i]; }
-    MisVertex* data() { return data_; }
-
-private:
-    static constexpr size_t kInline = 32;
-    alignas(MisVertex) std::byte inline_[kInline * sizeof(MisVertex)];
-    std::vector<MisVertex> heap_;
-    MisVertex* data_;
-};
-
 /// p_NEE(x0 | x1) / p_origin(x0), both area densities at x0 (bdpt_mis.h, `neeOverOriginA`): next-event
 /// estimation from x1 samples a sphere light over the cone it subtends (LightSet::sampleOne), a light
 /// sub-path starts uniformly on its area. Triangle, punctual and infinite lights are sampled alike
@@ -63,59 +41,84 @@ float neeOverOriginA(const RenderContext& ctx, const PathVertex& x0, const PathV
     return neeA > 0.f && originA > 0.f ? neeA / originA : 1.f;
 }
 
+MisVertex misVertexOf(const PathVertex& v) { return {v.pdfFwdA, v.pdfRevA, v.delta}; }
+
 }  // namespace
+
+void bdptMisPrefixes(const RenderContext& ctx, std::span<PathVertex> light, std::span<PathVertex> camera, MisHeuristic heuristic) {
+    // M_j of bdpt_mis.h's (†), in each sub-path's sampling order. The light side's c_0 needs y0
+    // hittable (not a delta light) and its g_1 is strategy s = 1's factor at y1; the lens has no
+    // strategy (c_0 = 0, M_0 = 0).
+    double prefix = 0.0;
+    if (!light.empty()) {
+        const bool lightIsDelta = ctx.scene.lights().isDelta(light[0].lightIndex);
+        const double g1 = light.size() >= 2 ? misNeeFactor(neeOverOriginA(ctx, light[0], light[1]), heuristic) : 1.0;
+        for (size_t j = 0; j < light.size(); ++j) {
+            bool prevDelta = j > 0 ? light[j - 1].delta : lightIsDelta;
+            prefix = misPrefixStep(prefix, misVertexOf(light[j]), !light[j].delta && !prevDelta, j == 1 ? g1 : 1.0, heuristic);
+            light[j].misPrefix = prefix;
+        }
+    }
+    prefix = 0.0;
+    for (size_t j = 0; j < camera.size(); ++j) {
+        if (j > 0) prefix = misPrefixStep(prefix, misVertexOf(camera[j]), !camera[j].delta && !camera[j - 1].delta, 1.0, heuristic);
+        camera[j].misPrefix = prefix;
+    }
+}
 
 float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
                          int s, int t, const PathVertex* qs, const PathVertex* pt, MisHeuristic heuristic) {
     // A camera ray that escaped to the environment (z1 at infinity) can only be found by that
     // camera ray: no lens connection reaches a direction.
     if (s == 0 && t == 2 && pt->atInfinity) return 1.f;
-    MisScratch y{size_t(s)}, z{size_t(t)};
-    // For s = 1 the light sub-path may be empty (its y0 is the resampled `qs`, filled in below).
-    for (int i = 0; i < s && size_t(i) < light.size(); ++i)
-        y[size_t(i)] = {light[size_t(i)].pdfFwdA, light[size_t(i)].pdfRevA, light[size_t(i)].delta};
-    for (int i = 0; i < t; ++i) z[size_t(i)] = {camera[size_t(i)].pdfFwdA, camera[size_t(i)].pdfRevA, camera[size_t(i)].delta};
     const PathVertex* qsMinus = s >= 2 ? &light[size_t(s - 2)] : nullptr;
     const PathVertex* ptMinus = t >= 2 ? &camera[size_t(t - 2)] : nullptr;
-
+    const bool lightIsDelta = s > 0 && ctx.scene.lights().isDelta((s == 1 ? *qs : light[0]).lightIndex);  // never hit
+    // Only the two last vertices of each side change with the connection; the rest enters through
+    // the prefix M of the third vertex from the end (bdpt_mis.h).
+    MisEnds y, z;
+    y.n = s;
+    z.n = t;
     // A resampled light endpoint (s = 1) enters the chain with the light sub-path's origin density
     // like every other strategy's y0; the factor `nee` below turns p_1 into the density next-event
     // estimation actually sampled it with (the visible cone of a sphere light). Russian roulette
     // stays out of the densities: the weights still sum to 1 over the strategies of every path,
     // which is all unbiasedness needs (Veach 1997, §9.2.2, eq. 9.6).
-    if (s == 1) y[0] = {pdfLightOriginA(ctx, *qs), 0.f, false};  // pdfRevA: set below (the light sub-path may be empty)
+    if (s == 1) y.end = {pdfLightOriginA(ctx, *qs), 0.f, false};  // pdfRevA: set below (the light sub-path may be empty)
+    else if (s >= 2) y.end = misVertexOf(*qs);
+    if (qsMinus) y.next = misVertexOf(*qsMinus);
+    y.prefix = s >= 3 ? light[size_t(s - 3)].misPrefix : 0.0;
+    y.nextPrevDelta = s >= 3 ? light[size_t(s - 3)].delta : lightIsDelta;
+    z.end = misVertexOf(*pt);
+    if (ptMinus) z.next = misVertexOf(*ptMinus);
+    z.prefix = t >= 3 ? camera[size_t(t - 3)].misPrefix : 0.0;
+    z.nextPrevDelta = t >= 3 && camera[size_t(t - 3)].delta;
     // The connection's endpoints scatter into the connection through a non-delta lobe, whatever lobe
     // their own walk sampled there (pbrt-v3's MISWeight resets them too); a camera endpoint on an
     // emitter acts as the light vertex y0 of strategy s = 1: never delta either.
-    if (s > 0) y[size_t(s - 1)].delta = false;
-    z[size_t(t - 1)].delta = false;
+    y.end.delta = false;
+    z.end.delta = false;
 
     // The four densities the connection changes (pbrt-v3 §16.3.4's "pdfRev" updates):
     // z(t−1) sampled from the light side: from y(s−1) (given y(s−2)), or as an emitter origin;
     // y(s−2) sampled from y(s−1) given z(t−1) (the same vertex pair: one call for both).
-    if (s == 0) z[size_t(t - 1)].pdfRevA = pdfLightOriginA(ctx, *pt);
-    else if (qsMinus) pdfBothWaysA(ctx, *qsMinus, *qs, *pt, z[size_t(t - 1)].pdfRevA, y[size_t(s - 2)].pdfRevA);
-    else z[size_t(t - 1)].pdfRevA = pdfNextA(ctx, nullptr, *qs, *pt);
+    if (s == 0) z.end.pdfRevA = pdfLightOriginA(ctx, *pt);
+    else if (qsMinus) pdfBothWaysA(ctx, *qsMinus, *qs, *pt, z.end.pdfRevA, y.next.pdfRevA);
+    else z.end.pdfRevA = pdfNextA(ctx, nullptr, *qs, *pt);
     // y(s−1) sampled from z(t−1) given z(t−2); z(t−2) sampled from z(t−1) given y(s−1), or emitted
     // from z(t−1) when it lies on a light.
     if (s == 0) {
-        if (ptMinus) z[size_t(t - 2)].pdfRevA = pdfLightDirectionA(ctx, *pt, *ptMinus);
+        if (ptMinus) z.next.pdfRevA = pdfLightDirectionA(ctx, *pt, *ptMinus);
     } else if (ptMinus) {
-        pdfBothWaysA(ctx, *ptMinus, *pt, *qs, y[size_t(s - 1)].pdfRevA, z[size_t(t - 2)].pdfRevA);
+        pdfBothWaysA(ctx, *ptMinus, *pt, *qs, y.end.pdfRevA, z.next.pdfRevA);
     } else {
-        y[size_t(s - 1)].pdfRevA = pdfNextA(ctx, nullptr, *pt, *qs);
+        y.end.pdfRevA = pdfNextA(ctx, nullptr, *pt, *qs);
     }
 
-    bool lightIsDelta = false;
     float nee = 1.f;  // p_NEE / p_origin of x0 given x1, for the strategy s = 1 of this path
-    if (s > 0) {
-        const PathVertex& y0 = s == 1 ? *qs : light[0];
-        lightIsDelta = ctx.scene.lights().isDelta(y0.lightIndex);  // point, spot, directional: never hit
-        nee = neeOverOriginA(ctx, y0, s == 1 ? *pt : light[1]);
-    } else if (ptMinus) {
-        nee = neeOverOriginA(ctx, *pt, *ptMinus);
-    }
-    return bdptMisWeight({y.data(), size_t(s)}, {z.data(), size_t(t)}, lightIsDelta, heuristic, nee);
+    if (s > 0) nee = neeOverOriginA(ctx, s == 1 ? *qs : light[0], s == 1 ? *pt : light[1]);
+    else if (ptMinus) nee = neeOverOriginA(ctx, *pt, *ptMinus);
+    return bdptMisWeightFromEnds(y, z, lightIsDelta, heuristic, nee);
 }
 
 ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,

@@ -27,10 +27,15 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
                              std::span<const PathVertex> camera, int s, int t, Sampler& sampler,
                              MisHeuristic heuristic, bool computeWeight = true);
 
+/// Fills PathVertex::misPrefix along both sub-paths (bdpt_mis.h's M_j): once per sample, after
+/// both walks, before any weight of the sample is computed; O(s + t), so that every weight is O(1).
+void bdptMisPrefixes(const RenderContext& ctx, std::span<PathVertex> light, std::span<PathVertex> camera, MisHeuristic heuristic);
+
 /// The MIS weight of strategy (s, t) given the connection endpoints actually used: `qs` replaces
 /// y(s−1) and `pt` replaces z(t−1) (they differ from the stored ones when resampled, s = 1 or
 /// t = 1). Recomputes the four densities the connection changes (pdfRevA of y(s−1), y(s−2),
-/// z(t−1), z(t−2)) and calls bdptMisWeight.
+/// z(t−1), z(t−2)) and calls bdptMisWeightFromEnds with the sub-paths' prefixes (bdptMisPrefixes
+/// must have run on them).
 float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
                          int s, int t, const PathVertex* qs, const PathVertex* pt, MisHeuristic heuristic);
 

@@ -49,4 +49,37 @@ enum class MisHeuristic { Balance, Power };
 float bdptMisWeight(std::span<const MisVertex> light, std::span<const MisVertex> camera, bool lightIsDelta,
                     MisHeuristic heuristic, float neeOverOriginA = 1.f);
 
+/// The same weight in O(1) per strategy: the recursive form of the sums above (Georgiev et al.
+/// 2012, "Light transport simulation with vertex connection and merging", technical report
+/// "Implementing Vertex Connection and Merging", eqs. 30–35: the quantities dVC/dVCM carried along
+/// each sub-path). Walking away from the connection, the (p_i / p_s)^β of the strategies that
+/// light-sample (camera side) or camera-sample (light side) the vertices v_j, v_(j−1), … are
+///     r_(m−1) r_(m−2) · M_(m−3) + (the two terms of the endpoint and its neighbour),
+/// with r_j = (pdfRevA_j / pdfFwdA_j)^β in the sub-path's own order and the prefix
+///     M_j = r_j · (c_j g_j + M_(j−1)),   M_(−1) = 0,                                  (†)
+/// c_j = 1 when strategy "connect between v_(j−1) and v_j" exists (neither is delta; for y0, the
+/// light is not a delta in position; for the lens z0, never), g_j the s = 1 factor neeOverOriginA^β
+/// at y1 (1 elsewhere). Only the endpoint and its neighbour have densities the connection changes,
+/// so every M_j further away is fixed once the walk is done: misPrefixStep computes (†) per vertex
+/// and bdptMisWeightFromEnds combines it with the two updated vertices of each side.
+/// Same sums as the loop form, summed in another order (double precision, like the loop).
+/// g_1 of (†): neeOverOriginA^β (1 where it is not positive).
+double misNeeFactor(float neeOverOriginA, MisHeuristic heuristic);
+double misPrefixStep(double prefixBefore, const MisVertex& v, bool connectibleTerm, double g, MisHeuristic heuristic);
+
+/// The last vertices of one sub-path as a strategy's weight needs them: `end` = v(n−1) and
+/// `next` = v(n−2) with the densities the connection changes already updated, `prefix` = M_(n−3)
+/// (0 when n < 3) and `nextPrevDelta` whether v(n−3) is delta (for the light sub-path with n = 2:
+/// whether the light is a delta in position; for the camera sub-path with n = 2: false).
+struct MisEnds {
+    int n = 0;  ///< vertices of the sub-path in the strategy (s or t)
+    MisVertex end, next;
+    double prefix = 0.0;
+    bool nextPrevDelta = false;
+};
+
+/// bdptMisWeight from the sub-paths' ends: O(1). `light.n` = s, `camera.n` = t.
+float bdptMisWeightFromEnds(const MisEnds& light, const MisEnds& camera, bool lightIsDelta, MisHeuristic heuristic,
+                            float neeOverOriginA = 1.f);
+
 }  // namespace tessera

@@ -39,6 +39,9 @@ struct PathVertex {
     bool atInfinity = false;  ///< an infinite light's vertex (environment, directional): `ng` is its direction
     float pdfFwdA = 0.f;  ///< area density; solid angle for a vertex at infinity
     float pdfRevA = 0.f;
+    /// BDPT's MIS prefix M_j through this vertex (bdpt_mis.h, eq. (†)); filled by bdptMisPrefixes
+    /// once both sub-paths are traced.
+    double misPrefix = 0.0;
 
     /// True where densities convert with the cosine at the vertex: surfaces and area-light points.
     bool onSurface() const {
