@@ -241,10 +241,13 @@ ConnectionResult connectVertices(const RenderContext& ctx, std::span<const PathV
     if (!(dist2 > 0.f)) return r;
     Vec3f wn = w / std::sqrt(dist2);
     float G = cosAt(qs, wn) * cosAt(pt, wn) / dist2;
-    // Each end's BSDF is built once: f here, and the two densities of the weight below.
-    SurfaceBsdf bsdfQs(qs.bsdf, qs.ns, qs.ng), bsdfPt(pt.bsdf, pt.ns, pt.ng);
-    r.L = qs.beta * bsdfQs.eval(qs.woWorld, wn, TransportMode::Importance) * G * bsdfPt.eval(pt.woWorld, -wn, TransportMode::Radiance) *
-          pt.beta;
+    // Each end's BSDF is built once: f here, and the two densities of the weight below. A third of
+    // these connections leave an end on a side its BSDF does not scatter to: the other is skipped.
+    SurfaceBsdf bsdfPt(pt.bsdf, pt.ns, pt.ng);
+    Rgb fPt = bsdfPt.eval(pt.woWorld, -wn, TransportMode::Radiance);
+    if (isBlack(fPt)) return r;
+    SurfaceBsdf bsdfQs(qs.bsdf, qs.ns, qs.ng);
+    r.L = qs.beta * bsdfQs.eval(qs.woWorld, wn, TransportMode::Importance) * G * fPt * pt.beta;
     if (isBlack(r.L) || !unoccluded(ctx, qs, pt)) return ConnectionResult{};
     attenuateEdge(ctx, r.L, qs, pt);
     if (isBlack(r.L)) return ConnectionResult{};
