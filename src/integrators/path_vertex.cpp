@@ -1,5 +1,7 @@
 #include "integrators/path_vertex.h"
 
+#include <optional>
+
 #include "integrators/russian_roulette.h"
 #include "integrators/volume.h"
 
@@ -173,6 +175,9 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
     const Scene& scene = ctx.scene;
     float rrScale = 1.f;  // product of BSDF weights (and η² for radiance): what Russian roulette looks at
     int limit = maxVertices < 0 ? kMaxSubpathVertices : std::min(maxVertices, kMaxSubpathVertices);
+    // The BSDF the last surface vertex sampled its direction with: the next vertex's two densities
+    // at that vertex come from the same object (no second frame and copy per vertex).
+    std::optional<SurfaceBsdf> lastBsdf;
     while (int(out.size()) < limit) {
         Hit hit;
         // The camera ray (a camera subpath's first segment) follows its neighbours: the coherent kernel.
@@ -223,14 +228,14 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
             v.pdfFwdA = deltaDensityA(prev, v);
             if (n >= 2) out[n - 2].pdfRevA = deltaDensityA(prev, out[n - 2]);
         } else if (n >= 2) {
-            pdfBothWaysA(ctx, out[n - 2], prev, v, v.pdfFwdA, out[n - 2].pdfRevA);
+            pdfBothWaysA(ctx, *lastBsdf, out[n - 2], prev, v, v.pdfFwdA, out[n - 2].pdfRevA);  // prev: a surface
         } else {
             v.pdfFwdA = pdfNextA(ctx, nullptr, prev, v);
         }
         if (!found || int(out.size()) >= limit) break;
 
         PathVertex& cur = out.back();
-        SurfaceBsdf bsdf(cur.bsdf, cur.ns, cur.ng);
+        const SurfaceBsdf& bsdf = lastBsdf.emplace(cur.bsdf, cur.ns, cur.ng);
         SurfaceBsdfSample bs;
         if (mode == TransportMode::Radiance) sampler.startBounce(int(out.size()) - 2);
         else sampler.startLightBounce(int(out.size()) - 2);
