@@ -73,11 +73,12 @@ TEST(Batch, BadJobAndMissingSceneAreReportedAndTheGoodImagesMatchRender) {
     json jobs = {
         {"defaults", {{"scene", kBox}, {"resolution", "32x24"}, {"spp", 2}, {"png", false}}},
         {"jobs",
-         {{{"name", "good-pt"}, {"integrator", "pt"}, {"seed", 3}, {"output", "good-pt.exr"}, {"png", true}},
+         {{{"name", "good-pt"}, {"integrator", "pt"}, {"sampler", "sobol"}, {"seed", 3}, {"output", "good-pt.exr"}, {"png", true}},
           {{"name", "bad-integrator"}, {"integrator", "nonsense"}, {"output", "bad.exr"}},
           {{"name", "no-scene"}, {"scene", "missing/nowhere.gltf"}, {"output", "missing.exr"}},
           {{"name", "good-lookat"},
            {"integrator", "ptnee"},
+           {"sampler", "independent"},
            {"max-depth", 3},
            {"camera", {{"look-at", {{0.278, 0.273, -0.6}, {0.25, 0.3, 0.0}, {0, 1, 0}}}, {"fov", 45}}},
            {"output", "out/good-lookat.exr"}}}},
@@ -108,7 +109,7 @@ TEST(Batch, BadJobAndMissingSceneAreReportedAndTheGoodImagesMatchRender) {
 
     // The good jobs are exactly what `tessera render` makes of the same options.
     const std::string common = " --quiet --resolution 32x24 --spp 2";
-    ASSERT_EQ(runTessera("render '" + kBox + "'" + common + " --integrator pt --seed 3 -o '" + (dir / "ref-pt.exr").string() +
+    ASSERT_EQ(runTessera("render '" + kBox + "'" + common + " --integrator pt --sampler sobol --seed 3 -o '" + (dir / "ref-pt.exr").string() +
                           "' --png '" + (dir / "ref-pt.png").string() + "'",
                       dir)
                   .code,
@@ -116,7 +117,7 @@ TEST(Batch, BadJobAndMissingSceneAreReportedAndTheGoodImagesMatchRender) {
     expectSameImage(dir / "good-pt.exr", dir / "ref-pt.exr");
     expectSameImage(dir / "good-pt.png", dir / "ref-pt.png");
     ASSERT_EQ(runTessera("render '" + kBox + "'" + common +
-                          " --no-png --integrator ptnee --max-depth 3 --look-at 0.278,0.273,-0.6,0.25,0.3,0,0,1,0 --fov 45 -o '" +
+                          " --no-png --integrator ptnee --sampler independent --max-depth 3 --look-at 0.278,0.273,-0.6,0.25,0.3,0,0,1,0 --fov 45 -o '" +
                           (dir / "ref-lookat.exr").string() + "'",
                       dir)
                   .code,
@@ -264,6 +265,7 @@ TEST(Batch, MalformedJobsFileIsOneLineNamingThePointer) {
         {"{\"jobs\": [{" + s + ", \"output\": \"o.exr\"}, {" + s + ", \"output\": \"./o.exr\"}]}",
          "/jobs/1/output: writes " + (dir / "o.exr").string() + " like /jobs/0 does"},
         {"{\"jobs\": [{" + s + ", \"integrator\": \"\"}]}", "/jobs/0/integrator: must not be empty"},
+        {"{\"jobs\": [{" + s + ", \"sampler\": \"halton\"}]}", "/jobs/0/sampler: unknown sampler \"halton\""},
         {"{\"jobs\": [{" + s + ", \"name\": \"\\u00e9\\ud800\"}]}", "not valid JSON"},
     };
     const std::string path = (dir / "jobs.json").string();

@@ -10,6 +10,7 @@
 #include <map>
 
 #include "core/error.h"
+#include "core/sampler_kind.h"
 
 namespace tessera::app {
 namespace {
@@ -227,6 +228,9 @@ private:
                 r.integrator = text(v, p);
             } else if (key == "accel") {
                 r.accel = text(v, p);
+            } else if (key == "sampler") {
+                r.sampler = text(v, p);
+                if (!parseSamplerKind(r.sampler)) fail(p, "unknown sampler \"" + r.sampler + "\" (expected \"sobol\" or \"independent\")");
             } else if (key == "spp") {
                 r.spp = int(integer(v, p, 1, 1 << 30));
                 r.timeLimit = 0.0;  // a job's spp replaces the defaults' time
@@ -267,7 +271,7 @@ private:
             } else if (key == "max-memory") {
                 r.maxMemoryGiB = number(v, p, 0.001, 1e6);
             } else {
-                fail(p, "unknown key (expected name, scene, camera, integrator, accel, spp, time, resolution, seed, "
+                fail(p, "unknown key (expected name, scene, camera, integrator, accel, sampler, spp, time, resolution, seed, "
                         "max-depth, output, png, display, view, env, env-rotate, env-intensity, allow-external-files, max-memory)");
             }
         }

@@ -1,7 +1,7 @@
 #pragma once
 /// \file batch_jobs.h
 /// The JOBS file of `tessera batch`: JSON, `{"defaults": {...}, "jobs": [{...}, ...]}`, each job a
-/// render (scene, camera, integrator, accel, spp or time, resolution, seed, max-depth, output, png,
+/// render (scene, camera, integrator, accel, sampler, spp or time, resolution, seed, max-depth, output, png,
 /// environment overrides, limits) whose keys override the defaults'. The format is documented in
 /// writeup.md ("Batch rendering").
 ///

@@ -293,8 +293,11 @@ RenderState readState(Reader& r, const std::string& path, uint32_t width, uint32
 }
 
 /// The film's accumulation state, the last part of the payload; nothing but the CRC may follow.
+/// Bytes of film state per pixel: nine fixed-point sums (RGB sum, sum of squares, splat) and a count.
+constexpr uint64_t kFilmBytesPerPixel = 9 * sizeof(FilmAccum) + sizeof(uint32_t);
+
 void readFilm(Reader& r, const std::string& path, Film& film) {
-    const uint64_t need = uint64_t(film.width()) * uint64_t(film.height()) * (9 * sizeof(FilmAccum) + sizeof(uint32_t)) + 4;
+    const uint64_t need = uint64_t(film.width()) * uint64_t(film.height()) * kFilmBytesPerPixel + 4;
     if (r.left() != need) throw InputError(path + ": checkpoint is corrupt (payload size does not match its contents)");
     r.array(film.sumData(), "film sums");
     r.array(film.sumSqData(), "film sums of squares");
@@ -302,14 +305,26 @@ void readFilm(Reader& r, const std::string& path, Film& film) {
     r.array(film.countData(), "film sample counts");
 }
 
+/// An open checkpoint or partial and its length; `missing` is the message when it cannot be sized.
+struct OpenedFile {
+    File file;
+    uint64_t size = 0;
+};
+
+OpenedFile openForReading(const std::string& path, const std::string& missing) {
+    std::error_code ec;
+    OpenedFile o;
+    o.size = fs::file_size(path, ec);
+    if (ec) throw InputError(path + ": " + missing + " (" + ec.message() + ")");
+    o.file.reset(std::fopen(path.c_str(), "rb"));
+    if (!o.file) throw InputError(path + ": cannot open: " + std::strerror(errno));
+    return o;
+}
+
 }  // namespace
 
 RenderState readCheckpoint(const std::string& path, const CheckpointHeader& expected, Film& film) {
-    std::error_code ec;
-    uint64_t size = fs::file_size(path, ec);
-    if (ec) throw InputError(path + ": no checkpoint to resume (" + ec.message() + "); render with --checkpoint SEC first");
-    File f(std::fopen(path.c_str(), "rb"));
-    if (!f) throw InputError(path + ": cannot open checkpoint: " + std::strerror(errno));
+    auto [f, size] = openForReading(path, "no checkpoint to resume; render with --checkpoint SEC first");
     Reader r(f.get(), path, size);
 
     std::string text = readFraming(r, f.get(), path, size);
@@ -324,31 +339,22 @@ RenderState readCheckpoint(const std::string& path, const CheckpointHeader& expe
 }
 
 CheckpointHeader readCheckpointHeader(const std::string& path) {
-    std::error_code ec;
-    uint64_t size = fs::file_size(path, ec);
-    if (ec) throw InputError(path + ": cannot read (" + ec.message() + ")");
-    File f(std::fopen(path.c_str(), "rb"));
-    if (!f) throw InputError(path + ": cannot open: " + std::strerror(errno));
+    auto [f, size] = openForReading(path, "cannot read");
     Reader r(f.get(), path, size);
     std::string text = readHeaderText(r, path);
     return parseHeader(text);
 }
 
 CheckpointContents readCheckpointContents(const std::string& path) {
-    std::error_code ec;
-    uint64_t size = fs::file_size(path, ec);
-    if (ec) throw InputError(path + ": cannot read (" + ec.message() + ")");
-    File f(std::fopen(path.c_str(), "rb"));
-    if (!f) throw InputError(path + ": cannot open: " + std::strerror(errno));
+    auto [f, size] = openForReading(path, "cannot read");
     Reader r(f.get(), path, size);
 
     CheckpointContents c;
     c.header = parseHeader(readFraming(r, f.get(), path, size));
     auto [width, height] = readFilmSize(r);
     // Allocate only what the file can hold: its length was checked against the payload length.
-    constexpr uint64_t perPixel = 9 * sizeof(FilmAccum) + sizeof(uint32_t);
     if (width == 0 || height == 0 || width > uint32_t(INT32_MAX) || height > uint32_t(INT32_MAX) ||
-        uint64_t(height) > r.left() / perPixel / width)
+        uint64_t(height) > r.left() / kFilmBytesPerPixel / width)
         throw InputError(path + ": checkpoint is corrupt (a " + std::to_string(width) + "x" + std::to_string(height) +
                          " film does not fit in its " + std::to_string(size) + " bytes)");
     c.state = readState(r, path, width, height);
