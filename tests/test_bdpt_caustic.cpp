@@ -288,15 +288,6 @@ TEST(BdptCaustic, RingCausticErrorFallsAsOneOverN) {
 // (16x the events at 1/16 the value): the same paths and strategies, measurable in seconds.
 TEST(BdptCaustic, SdsCausticErrorFallsAsOneOverN) {
     Scene scene = loadScene("scenes/sds-caustic/sds-caustic.gltf");
-    int lights = 0;
-    for (Sphere& s : scene.geometry.spheres) {
-        Material& m = scene.materials[s.materialId];
-        if (!m.isEmissive()) continue;  // the light's material is its own
-        s.radius *= 4.f;
-        m.emission = m.emission / 16.f;
-        ++lights;
-    }
-    ASSERT_EQ(lights, 1);
-    scene.finalize();
+    ASSERT_EQ(test::enlargeSphereLight(scene, 4.f), 1);
     expectConvergesAsOneOverN(scene, "sds-caustic", 32, 24, 32, 7);
 }
