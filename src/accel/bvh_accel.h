@@ -36,7 +36,8 @@ public:
     void allowAvx2Kernels() { isa_.useBest(); }
     /// Checks the tree: every primitive with finite bounds reachable exactly once, each child box
     /// inside its parent's box, every primitive inside its leaf's box (with spatial splits: reachable
-    /// at least once, and meeting each leaf box that holds it). Returns "" or the first problem.
+    /// at least once, and meeting each leaf box that holds it), each node's lanes ordered by the
+    /// references below them, most first (the any-hit order). Returns "" or the first problem.
     std::string checkInvariants() const;
     /// Primitive references in the leaves: the primitive count, or more where spatial splits
     /// placed parts of a primitive in several leaves.
@@ -88,6 +89,9 @@ private:
     /// kept lane, or lane −1 when none is kept.
     TriangleCandidate filterMaskedLanes(const TriRay& r, const Triangle4& tri, float tMax) const;
     void prefetchChild(uint32_t ref) const;
+    /// References in the subtree of `ref`; sets `problem` where a node's lanes are out of order.
+    uint32_t subtreeReferences(uint32_t ref, std::string& problem) const;
+    std::string checkLaneOrder() const;
     void prefetchAny(uint32_t ref) const;
     /// The first Triangle4 block of a triangle leaf reference.
     const Triangle4* leafBlocks(uint32_t ref) const {
@@ -95,16 +99,26 @@ private:
     }
     /// The inner node an inner child reference (a byte offset into nodes_) names.
     const Node8& node(uint32_t ref) const { return *reinterpret_cast<const Node8*>(reinterpret_cast<const char*>(nodes_.data()) + ref); }
+    /// A triangle leaf of the binary tree (primIndices[first, first + count)) and its first block.
+    struct LeafBlocks {
+        uint32_t first, count, firstBlock;
+    };
     /// The binary tree over the gathered primitives (prims_, boxes `primBounds`).
-    BinaryBvh buildBinaryTree(std::span<const Bounds3f> primBounds, const AccelOptions& options) const;
+    BinaryBvh buildBinaryTree(std::span<const Bounds3f> primBounds) const;
     /// Collapses the binary tree into nodes_, triangles_ and mixedPrims_.
     void buildWideTree(const BinaryBvh& bin);
-    uint32_t collapse(const BinaryBvh& bin, uint32_t binNode);
-    uint32_t makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf);
+    /// The wide node over binary node `binNode`'s subtree (and, first, those below it): returns
+    /// its reference; `prims` gets the subtree's primitive count. Triangle leaves are numbered in
+    /// `leaves` (next block: `blocks`) and filled afterwards by fillLeaves.
+    uint32_t collapse(const BinaryBvh& bin, uint32_t binNode, std::vector<LeafBlocks>& leaves, uint32_t& blocks,
+                      uint32_t& prims);
+    uint32_t makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf, std::vector<LeafBlocks>& leaves, uint32_t& blocks);
+    void fillLeaves(const BinaryBvh& bin, const std::vector<LeafBlocks>& leaves, uint32_t blocks);
 
     const SceneGeometry& geometry_;
     BvhConfig config_;
     std::vector<PrimRef> prims_;  ///< build primitive index → (geomId, primId)
+    uint32_t triangleRefs_ = 0;   ///< prims_[0, triangleRefs_) are triangles, the rest spheres
     std::vector<Node8, HugePageAllocator<Node8>> nodes_;    ///< node 0 is the root (absent for an empty scene)
     std::vector<Triangle4, HugePageAllocator<Triangle4>> triangles_;
     std::vector<PrimRef> mixedPrims_;

@@ -6,6 +6,7 @@
 /// (bvh_builder.cpp) and the object splits of the spatial-split build (bvh_spatial.cpp).
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 
 #include "accel/accel_simd.h"
 #include "core/bounds.h"
@@ -45,28 +46,43 @@ struct Box {
     }
 };
 
+/// The x, y, z lanes of v, lane 3 zeroed (the builders keep a primitive index in lane 3 of a box
+/// corner; arithmetic on those bits, denormal floats, may be slow).
+TESSERA_INLINE Vf4 xyz(Vf4 v) {
+    const Vi4 keep = {-1, -1, -1, 0};
+    return reinterpret_cast<Vf4>(reinterpret_cast<Vi4>(v) & keep);
+}
+
 /// Per-axis bins of one node: box and count of the primitives whose centroid falls in each bin.
 struct Binning {
     // Plain SIMD arrays (trivially constructible), initialised for the bins in use only: small
     // nodes are the majority and clearing 3 × kMaxBins boxes each time dominated the build.
     Vf4 lo[3][kMaxBins], hi[3][kMaxBins];
-    uint32_t counts[3][kMaxBins];
+    /// counts[bin][axis] (lane 3 unused): the sweep reads one bin's three counts as one vector.
+    alignas(16) uint32_t counts[kMaxBins][4];
 
     explicit Binning(int binCount = kMaxBins) {
-        for (int a = 0; a < 3; ++a)
-            for (int i = 0; i < binCount; ++i) lo[a][i] = simd::splat4(kInfinity), hi[a][i] = simd::splat4(-kInfinity), counts[a][i] = 0;
+        for (int i = 0; i < binCount; ++i) {
+            for (int a = 0; a < 3; ++a) lo[a][i] = simd::splat4(kInfinity), hi[a][i] = simd::splat4(-kInfinity);
+            for (int a = 0; a < 4; ++a) counts[i][a] = 0;
+        }
     }
     TESSERA_INLINE void add(int axis, int bin, Vf4 l, Vf4 h) {
         lo[axis][bin] = vmin(lo[axis][bin], l);
         hi[axis][bin] = vmax(hi[axis][bin], h);
-        ++counts[axis][bin];
+        ++counts[bin][axis];
+    }
+    TESSERA_INLINE Vi4 binCounts(int bin) const {
+        Vi4 c;
+        std::memcpy(&c, counts[bin], sizeof c);
+        return c;
     }
     void merge(const Binning& o, int binCount) {
         for (int a = 0; a < 3; ++a)
             for (int i = 0; i < binCount; ++i) {
                 lo[a][i] = vmin(lo[a][i], o.lo[a][i]);
                 hi[a][i] = vmax(hi[a][i], o.hi[a][i]);
-                counts[a][i] += o.counts[a][i];
+                counts[i][a] += o.counts[i][a];
             }
     }
 };
@@ -89,6 +105,9 @@ struct BinMapping {
     TESSERA_INLINE int bin(Vf4 c, int axis) const {
         return std::clamp(int((c[axis] - lower[axis]) * scale[axis]), 0, binCount - 1);
     }
+    /// bin(c, axis) < b for a centroid inside the mapped box (c ≥ lower) and 1 ≤ b < binCount,
+    /// without the conversion: (c − lower)·scale ≥ 0 truncates below b exactly when it is below b.
+    TESSERA_INLINE bool below(Vf4 c, int axis, float b) const { return (c[axis] - lower[axis]) * scale[axis] < b; }
 };
 
 /// The cheapest object split of a node: planes before bin `bin` of axis `axis` (−1: none).
@@ -99,39 +118,70 @@ struct ObjectSplit {
     uint32_t leftCount = 0, rightCount = 0;
 };
 
-/// Sweeps the bins of each axis from both ends and returns the cheapest plane (in units of
-/// half-area × blocks; the node's constant terms are added by the caller) with both child boxes.
-/// `k` bins in use, `blockSize` primitives per leaf block (sahBlocks).
+/// Half the surface areas of three boxes at once (lanes 0–2; lane 3 junk): the 3 × 3 extents
+/// transposed, so that one multiply-add chain serves all three axes' candidate boxes.
+TESSERA_INLINE Vf4 halfAreas3(const Box& a, const Box& b, const Box& c) {
+    Vf4 da = a.hi - a.lo, db = b.hi - b.lo, dc = c.hi - c.lo;
+    Vf4 t0 = __builtin_shufflevector(da, db, 0, 4, 1, 5);  // ax bx ay by
+    Vf4 t1 = __builtin_shufflevector(da, db, 2, 6, 2, 6);  // az bz az bz
+    Vf4 x = __builtin_shufflevector(t0, dc, 0, 1, 4, 4);
+    Vf4 y = __builtin_shufflevector(t0, dc, 2, 3, 5, 5);
+    Vf4 z = __builtin_shufflevector(t1, dc, 0, 1, 6, 6);
+    return x * y + y * z + z * x;
+}
+
+/// Leaf blocks ⌈n / blockSize⌉ of three counts at once (lanes 0–2), as floats. `blockShift` is
+/// log2(blockSize) when blockSize is a power of two, else −1.
+TESSERA_INLINE Vf4 sahBlocks3(Vi4 n, int blockSize, int blockShift) {
+    if (blockShift >= 0) return __builtin_convertvector((n + (blockSize - 1)) >> blockShift, Vf4);
+    Vf4 r;
+    for (int a = 0; a < 4; ++a) r[a] = sahBlocks(uint32_t(n[a]), blockSize);
+    return r;
+}
+
+/// Sweeps the bins of all three axes at once from both ends (the layout of Embree's binning: lanes
+/// are axes) and returns the cheapest plane (in units of half-area × blocks; the node's constant
+/// terms are added by the caller) with both child boxes. `k` bins in use, `blockSize` primitives
+/// per leaf block (sahBlocks). An empty side has no area (an inverted box, area +inf) and no blocks:
+/// 0 · inf is NaN, which never compares below the best cost, so such planes are never chosen. Ties
+/// go to the lowest axis, then the lowest bin.
 inline ObjectSplit findObjectSplit(const Binning& bins, int k, int blockSize) {
+    int blockShift = (blockSize & (blockSize - 1)) == 0 ? __builtin_ctz(uint32_t(blockSize)) : -1;
+    Vf4 rightArea[kMaxBins];
+    Vi4 rightCount[kMaxBins];
+    Box bx, by, bz;
+    Vi4 count{};
+    for (int i = k - 1; i > 0; --i) {
+        count += bins.binCounts(i);
+        bx.extend(bins.lo[0][i], bins.hi[0][i]);
+        by.extend(bins.lo[1][i], bins.hi[1][i]);
+        bz.extend(bins.lo[2][i], bins.hi[2][i]);
+        rightArea[i] = halfAreas3(bx, by, bz);
+        rightCount[i] = count;
+    }
+    bx = by = bz = Box();
+    count = Vi4{};
+    Vf4 bestCost = simd::splat4(kInfinity);
+    Vi4 bestBin{};
+    for (int i = 1; i < k; ++i) {
+        count += bins.binCounts(i - 1);
+        bx.extend(bins.lo[0][i - 1], bins.hi[0][i - 1]);
+        by.extend(bins.lo[1][i - 1], bins.hi[1][i - 1]);
+        bz.extend(bins.lo[2][i - 1], bins.hi[2][i - 1]);
+        Vf4 cost = halfAreas3(bx, by, bz) * sahBlocks3(count, blockSize, blockShift) +
+                   rightArea[i] * sahBlocks3(rightCount[i], blockSize, blockShift);
+        Vi4 better = cost < bestCost;  // strict: the lowest bin wins ties
+        bestCost = better ? cost : bestCost;
+        bestBin = better ? Vi4{} + i : bestBin;
+    }
     ObjectSplit best;
-    for (int a = 0; a < 3; ++a) {
-        // Plain arrays, written only for the k bins in use: default-constructing 32 boxes per
-        // axis per node cost more than the sweep itself on the many small nodes.
-        float rightCost[kMaxBins];
-        Vf4 rightLo[kMaxBins], rightHi[kMaxBins];
-        Box acc;
-        uint32_t count = 0;
-        for (int i = k - 1; i > 0; --i) {
-            acc.extend(bins.lo[a][i], bins.hi[a][i]);
-            count += bins.counts[a][i];
-            rightCost[i] = acc.halfArea() * sahBlocks(count, blockSize);
-            rightLo[i] = acc.lo, rightHi[i] = acc.hi;
-        }
-        acc = Box();
-        count = 0;
-        uint32_t total = 0;
-        for (int i = 0; i < k; ++i) total += bins.counts[a][i];
-        for (int i = 1; i < k; ++i) {
-            acc.extend(bins.lo[a][i - 1], bins.hi[a][i - 1]);
-            count += bins.counts[a][i - 1];
-            if (count == 0 || count == total) continue;
-            float cost = acc.halfArea() * sahBlocks(count, blockSize) + rightCost[i];
-            if (cost < best.cost) {  // strict: lowest axis, then bin, wins ties
-                best.axis = a, best.bin = i, best.cost = cost;
-                best.left = acc, best.right.lo = rightLo[i], best.right.hi = rightHi[i];
-                best.leftCount = count, best.rightCount = total - count;
-            }
-        }
+    for (int a = 0; a < 3; ++a)
+        if (bestCost[a] < best.cost) best.axis = a, best.bin = bestBin[a], best.cost = bestCost[a];
+    if (best.axis < 0) return best;
+    for (int i = 0; i < k; ++i) {
+        uint32_t c = bins.counts[i][best.axis];
+        if (i < best.bin) best.left.extend(bins.lo[best.axis][i], bins.hi[best.axis][i]), best.leftCount += c;
+        else best.right.extend(bins.lo[best.axis][i], bins.hi[best.axis][i]), best.rightCount += c;
     }
     return best;
 }

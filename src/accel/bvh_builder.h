@@ -58,8 +58,8 @@ struct BvhBuildNode {
 };
 
 /// The builder's output. Node 0 is the root (absent when there are no primitives). Slots of `nodes`
-/// not reachable from the root may exist (each subtree reserves 2n − 1 slots so that subtrees can
-/// be built in parallel and still land at the same indices whatever the thread count).
+/// not reachable from the root exist (each subtree reserves 2n − 1 slots so that subtrees can be
+/// built in parallel and still land at the same indices whatever the thread count), unwritten.
 struct BinaryBvh {
     /// 2n − 1 slots, allocated without being written: most stay unused (leaves hold several
     /// primitives), and value-initialising ~60 MB of nodes for the dragon cost a tenth of the build
@@ -85,10 +85,9 @@ struct BinaryBvh {
     uint32_t maxDepth = 0;
 };
 
-/// Builds the tree over primitives with the given bounds and centroids (same length; primitives whose
+/// Builds the tree over primitives with the given bounds, binned by their centres (primitives whose
 /// bounds are empty or not finite must be left out by the caller). Runs in the calling thread's TBB
-/// arena; the result is identical for any number of threads.
-BinaryBvh buildBinaryBvh(std::span<const Bounds3f> primBounds, std::span<const Vec3f> centroids,
-                         const BvhConfig& config);
+/// arena; the tree is identical for any number of threads.
+BinaryBvh buildBinaryBvh(std::span<const Bounds3f> primBounds, const BvhConfig& config);
 
 }  // namespace tessera

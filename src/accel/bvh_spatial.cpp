@@ -221,7 +221,10 @@ private:
 
     uint32_t build(std::vector<SRef>& refs, const Bounds3f& bounds, uint32_t depth) {
         uint32_t n = uint32_t(refs.size());
-        if (n == 1) return makeLeaf(refs, bounds, depth);
+        // A leaf that no split can beat (a split costs at least traversalCost): neither split is
+        // priced. Such nodes are the most numerous, and their references span most spatial bins.
+        if (n <= uint32_t(config_.maxLeafSize) && config_.intersectionCost * blocks(n) <= config_.traversalCost)
+            return makeLeaf(refs, bounds, depth);
         Bounds3f centroidBox;
         for (const SRef& r : refs) centroidBox.extend(r.centroid());
 

@@ -268,18 +268,21 @@ TESSERA_INLINE bool BvhAccel::occludedImpl(const Ray& ray) const {
     uint32_t ref = 0;
     while (true) {
         if (!(ref & kLeafBit)) {
-            // No ordering for any-hit queries (as in Embree's any-hit traversal): comparing entry
-            // distances costs more than it saves (docs/perf-log.md).
+            // No run-time ordering for any-hit queries (as in Embree's any-hit traversal): the
+            // builder orders each node's lanes by subtree size, largest first (collapse()), and the
+            // hit lanes are entered from the last, so the smallest subtrees, often leaves that end
+            // the query, come first. Comparing entry distances cost more than it saved.
             const Node8& node = this->node(ref);
             Vf8 tNear;
             uint32_t mask = moveMask8Isa<kAvx>(boxRay.test(node, tMaxPadded, tNear));
             if (mask) {
-                int first = __builtin_ctz(mask);
-                mask &= mask - 1;
+                int first = 31 - __builtin_clz(mask);
+                mask &= ~(1u << first);
                 if constexpr (kAvx) {
-                    // All other hit children pushed at once: a table turns the mask into vpermd
-                    // indices that pack their references to the front of the register, one
-                    // 32-byte store writes them, and sp grows by their count. The loop it replaces
+                    // All other hit children pushed at once, in lane order (the next smallest on
+                    // top): a table turns the mask into vpermd indices that pack their references
+                    // to the front of the register, one 32-byte store writes them, and sp grows by
+                    // their count. The loop it replaces
                     // mispredicted its exit on every node (the count is a coin toss for incoherent
                     // rays).
                     Vi8 kids;

@@ -21,18 +21,16 @@ InstancedAccel::InstancedAccel(const SceneGeometry& geometry, const Factory& mak
         memory += prototypes_[p]->stats().memoryBytes;
     }
     std::vector<Bounds3f> boxes;
-    std::vector<Vec3f> centroids;
     for (uint32_t i = 0; i < geometry.instances.size(); ++i) {
         Bounds3f b = instanceWorldBounds(geometry.instances[i], objectBounds[geometry.instances[i].prototype]);
         if (!finiteBounds(b)) continue;  // an empty prototype, or one the transform sends to infinity
         boxes.push_back(b);
-        centroids.push_back(b.center());
         topInstances_.push_back(i);
     }
     BvhConfig config;
     config.sahBlockSize = 1;  // an instance is visited alone
     config.maxLeafSize = 1;
-    top_ = buildBinaryBvh(boxes, centroids, config);
+    top_ = buildBinaryBvh(boxes, config);
     memory += top_.nodes.size * sizeof(BvhBuildNode) + top_.primIndices.size() * sizeof(uint32_t) +
               topInstances_.size() * sizeof(uint32_t) + geometry.instances.size() * sizeof(MeshInstance);
     bounds_ = flat_->bounds();
