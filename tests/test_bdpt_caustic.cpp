@@ -125,6 +125,7 @@ bool checkPath(const RenderContext& ctx, const std::vector<PathVertex>& camPath,
                 v.pdfFwdA = float(pE[size_t(i)]), v.pdfRevA = float(pL[size_t(i)]);
                 zs.push_back(v);
             }
+            bdptMisPrefixes(ctx, ys, zs, h);
             float w = bdptStrategyWeight(ctx, ys, zs, s, k + 1 - s, s > 0 ? &ys.back() : nullptr, &zs.back(), h);
             double expected = p[size_t(s)] / sumP;
             EXPECT_NEAR(w, expected, 2e-3 * expected + 1e-6) << "strategy s = " << s << " of a path of " << k + 1 << " vertices";
@@ -287,15 +288,6 @@ TEST(BdptCaustic, RingCausticErrorFallsAsOneOverN) {
 // (16x the events at 1/16 the value): the same paths and strategies, measurable in seconds.
 TEST(BdptCaustic, SdsCausticErrorFallsAsOneOverN) {
     Scene scene = loadScene("scenes/sds-caustic/sds-caustic.gltf");
-    int lights = 0;
-    for (Sphere& s : scene.geometry.spheres) {
-        Material& m = scene.materials[s.materialId];
-        if (!m.isEmissive()) continue;  // the light's material is its own
-        s.radius *= 4.f;
-        m.emission = m.emission / 16.f;
-        ++lights;
-    }
-    ASSERT_EQ(lights, 1);
-    scene.finalize();
+    ASSERT_EQ(test::enlargeSphereLight(scene, 4.f), 1);
     expectConvergesAsOneOverN(scene, "sds-caustic", 32, 24, 32, 7);
 }

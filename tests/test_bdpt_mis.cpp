@@ -81,6 +81,7 @@ bool checkWeightsOfPath(const RenderContext& ctx, const std::vector<PathVertex>&
         for (int s = lightIsDelta ? 1 : 0; s <= k; ++s) {
             int t = k + 1 - s;
             splitPath(x, pL, pE, s, lightMaterial, ys, zs);
+            bdptMisPrefixes(ctx, ys, zs, h);
             float w = bdptStrategyWeight(ctx, ys, zs, s, t, s > 0 ? &ys.back() : nullptr, &zs.back(), h);
             expectRelNear(w, ps[size_t(s)] / sumPs, 2e-3, "weight of (s=" + std::to_string(s) + ", t=" + std::to_string(t) + ")");
             sumW += w;
@@ -120,6 +121,42 @@ TEST(BdptMis, StoredDensitiesMatchAndWeightsOfAllStrategiesSumToOne) {
         if (checkWeightsOfPath(ctx, x, scene.materials[lightMaterial].bsdf)) ++pathsChecked;
     }
     EXPECT_GE(pathsChecked, 50);
+}
+
+// connectBdpt takes a connection's densities from the BSDFs it built to evaluate f; they must be
+// exactly those connectionDensities evaluates from the vertices (the weights' one definition), for
+// every strategy that draws no random numbers (general connections, s = 0), with either heuristic,
+// in a diffuse box and in one with mirror and glass objects (delta vertices on the sub-paths).
+TEST(BdptMis, ConnectionsWeightWithTheDensitiesTheVerticesDefine) {
+    for (const char* name : {"cornell-box", "cornell-box-specular"}) {
+        std::vector<std::string> warnings;
+        Scene scene = loadGltfScene(test::sourcePath(std::string("scenes/") + name + "/" + name + ".gltf"), warnings);
+        auto accel = createAccel("embree", scene.geometry);
+        Camera cam(*scene.camera, 32, 32);
+        RenderContext ctx{scene, *accel, cam, -1};
+        std::vector<PathVertex> camera, light;
+        int compared = 0;
+        for (uint32_t trial = 0; trial < 1000; ++trial) {
+            Sampler sampler(Vec2i(int(trial % 32), int(trial / 32)), trial, 41);
+            traceCameraSubpath(ctx, Vec2f(float(trial % 32) + 0.5f, float((trial / 32) % 32) + 0.5f), sampler, -1, camera);
+            traceLightSubpath(ctx, sampler, -1, light);
+            for (MisHeuristic h : {MisHeuristic::Power, MisHeuristic::Balance}) {
+                bdptMisPrefixes(ctx, light, camera, h);
+                for (int t = 2; t <= int(camera.size()); ++t)
+                    for (int s = 0; s <= int(light.size()); ++s) {
+                        if (s == 1) continue;  // resamples its light point
+                        ConnectionResult r = connectBdpt(ctx, light, camera, s, t, sampler, h);
+                        if (isBlack(r.L)) continue;
+                        float w = bdptStrategyWeight(ctx, light, camera, s, t, s > 0 ? &light[size_t(s - 1)] : nullptr,
+                                                     &camera[size_t(t - 1)], h);
+                        EXPECT_EQ(r.weight, w) << name << " (s=" << s << ", t=" << t << ")";
+                        ++compared;
+                    }
+            }
+        }
+        std::cout << name << ": " << compared << " weights compared\n";
+        EXPECT_GE(compared, 1000) << name;
+    }
 }
 
 TEST(BdptMis, DeltaVerticesAreSkippedAndTheRestSumToOne) {

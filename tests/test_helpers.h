@@ -151,6 +151,23 @@ inline Scene closedSphere(Rgb albedo, Rgb Le, bool asMesh, const std::vector<Poi
     return scene;
 }
 
+/// Scales the radius of the scene's one emissive sphere by `factor` and its emission by 1/factor²:
+/// the same power and the same light paths, factor² times as many camera paths hitting the light,
+/// each worth 1/factor² as much. For the caustic scenes, whose rare s = 0 events are otherwise too
+/// few per test render to measure. Returns the number of spheres changed (the caller expects 1).
+inline int enlargeSphereLight(Scene& scene, float factor) {
+    int lights = 0;
+    for (Sphere& s : scene.geometry.spheres) {
+        Material& m = scene.materials[s.materialId];
+        if (!m.isEmissive()) continue;  // the light's material is its own
+        s.radius *= factor;
+        m.emission = m.emission / (factor * factor);
+        ++lights;
+    }
+    scene.finalize();
+    return lights;
+}
+
 // ===== Render set-up: one helper for every test that renders a scene ==============================
 
 /// A finished test render: the film and the scheduler's figures.

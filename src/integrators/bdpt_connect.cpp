@@ -1,7 +1,6 @@
 #include "integrators/bdpt_connect.h"
 
-#include <cstddef>
-#include <memory>
+#include <optional>
 
 #include "integrators/next_event.h"
 
@@ -25,25 +24,6 @@ void attenuateEdge(const RenderContext& ctx, Rgb& L, const PathVertex& a, const 
     if (attenuates) L *= T;
 }
 
-/// Fixed-capacity scratch for the MIS densities, growing on the heap only for very long paths.
-/// Only the n entries in use are constructed: initialising the whole inline array was most of the
-/// cost of a weight.
-class MisScratch {
-public:
-    MisScratch(const MisScratch&) = delete;
-    explicit MisScratch(size_t n) : heap_(n > kInline ? n : 0) {
-        data_ = n > kInline ? heap_.data() : std::uninitialized_default_construct_n(reinterpret_cast<MisVertex*>(inline_), n) - n;
-    }
-    MisVertex& operator[](size_t i) { return data_[i]; }
-    MisVertex* data() { return data_; }
-
-private:
-    static constexpr size_t kInline = 32;
-    alignas(MisVertex) std::byte inline_[kInline * sizeof(MisVertex)];
-    std::vector<MisVertex> heap_;
-    MisVertex* data_;
-};
-
 /// p_NEE(x0 | x1) / p_origin(x0), both area densities at x0 (bdpt_mis.h, `neeOverOriginA`): next-event
 /// estimation from x1 samples a sphere light over the cone it subtends (LightSet::sampleOne), a light
 /// sub-path starts uniformly on its area. Triangle, punctual and infinite lights are sampled alike
@@ -63,124 +43,235 @@ float neeOverOriginA(const RenderContext& ctx, const PathVertex& x0, const PathV
     return neeA > 0.f && originA > 0.f ? neeA / originA : 1.f;
 }
 
+MisVertex misVertexOf(const PathVertex& v) { return {v.pdfFwdA, v.pdfRevA, v.delta}; }
+
 }  // namespace
+
+void bdptMisPrefixes(const RenderContext& ctx, std::span<PathVertex> light, std::span<PathVertex> camera, MisHeuristic heuristic) {
+    // M_j of bdpt_mis.h's (†), in each sub-path's sampling order. The light side's c_0 needs y0
+    // hittable (not a delta light) and its g_1 is strategy s = 1's factor at y1; the lens has no
+    // strategy (c_0 = 0, M_0 = 0).
+    double prefix = 0.0;
+    if (!light.empty()) {
+        const bool lightIsDelta = ctx.scene.lights().isDelta(light[0].lightIndex);
+        const double g1 = light.size() >= 2 ? misNeeFactor(neeOverOriginA(ctx, light[0], light[1]), heuristic) : 1.0;
+        for (size_t j = 0; j < light.size(); ++j) {
+            bool prevDelta = j > 0 ? light[j - 1].delta : lightIsDelta;
+            prefix = misPrefixStep(prefix, misVertexOf(light[j]), !light[j].delta && !prevDelta, j == 1 ? g1 : 1.0, heuristic);
+            light[j].misPrefix = prefix;
+        }
+    }
+    prefix = 0.0;
+    for (size_t j = 0; j < camera.size(); ++j) {
+        if (j > 0) prefix = misPrefixStep(prefix, misVertexOf(camera[j]), !camera[j].delta && !camera[j - 1].delta, 1.0, heuristic);
+        camera[j].misPrefix = prefix;
+    }
+}
+
+ConnectionDensities connectionDensities(const RenderContext& ctx, std::span<const PathVertex> light,
+                                        std::span<const PathVertex> camera, int s, int t, const PathVertex* qs,
+                                        const PathVertex* pt) {
+    ConnectionDensities d;
+    const PathVertex* qsMinus = s >= 2 ? &light[size_t(s - 2)] : nullptr;
+    const PathVertex* ptMinus = t >= 2 ? &camera[size_t(t - 2)] : nullptr;
+    // z(t−1) sampled from the light side: from y(s−1) (given y(s−2)), or as an emitter origin;
+    // y(s−2) sampled from y(s−1) given z(t−1) (the same vertex pair: one call for both).
+    if (s == 0) {
+        // z(t−2) emitted from z(t−1), which lies on a light.
+        if (ptMinus) pdfLightBothA(ctx, *pt, *ptMinus, d.ptRevA, d.ptMinusRevA);
+        else d.ptRevA = pdfLightOriginA(ctx, *pt);
+        return d;
+    }
+    if (qsMinus) pdfBothWaysA(ctx, *qsMinus, *qs, *pt, d.ptRevA, d.qsMinusRevA);
+    else pdfLightBothA(ctx, *qs, *pt, d.qsOriginA, d.ptRevA);  // s = 1: y0 itself, emitting towards z(t−1)
+    // y(s−1) sampled from z(t−1) given z(t−2); z(t−2) sampled from z(t−1) given y(s−1).
+    if (ptMinus) pdfBothWaysA(ctx, *ptMinus, *pt, *qs, d.qsRevA, d.ptMinusRevA);
+    else d.qsRevA = pdfNextA(ctx, nullptr, *pt, *qs);
+    return d;
+}
 
 float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
                          int s, int t, const PathVertex* qs, const PathVertex* pt, MisHeuristic heuristic) {
+    return bdptStrategyWeight(ctx, light, camera, s, t, qs, pt, connectionDensities(ctx, light, camera, s, t, qs, pt), heuristic);
+}
+
+float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
+                         int s, int t, const PathVertex* qs, const PathVertex* pt, const ConnectionDensities& d,
+                         MisHeuristic heuristic) {
     // A camera ray that escaped to the environment (z1 at infinity) can only be found by that
     // camera ray: no lens connection reaches a direction.
     if (s == 0 && t == 2 && pt->atInfinity) return 1.f;
-    MisScratch y{size_t(s)}, z{size_t(t)};
-    // For s = 1 the light sub-path may be empty (its y0 is the resampled `qs`, filled in below).
-    for (int i = 0; i < s && size_t(i) < light.size(); ++i)
-        y[size_t(i)] = {light[size_t(i)].pdfFwdA, light[size_t(i)].pdfRevA, light[size_t(i)].delta};
-    for (int i = 0; i < t; ++i) z[size_t(i)] = {camera[size_t(i)].pdfFwdA, camera[size_t(i)].pdfRevA, camera[size_t(i)].delta};
-    const PathVertex* qsMinus = s >= 2 ? &light[size_t(s - 2)] : nullptr;
-    const PathVertex* ptMinus = t >= 2 ? &camera[size_t(t - 2)] : nullptr;
-
+    const bool lightIsDelta = s > 0 && ctx.scene.lights().isDelta((s == 1 ? *qs : light[0]).lightIndex);  // never hit
+    // Only the two last vertices of each side change with the connection; the rest enters through
+    // the prefix M of the third vertex from the end (bdpt_mis.h).
+    MisEnds y, z;
+    y.n = s;
+    z.n = t;
     // A resampled light endpoint (s = 1) enters the chain with the light sub-path's origin density
     // like every other strategy's y0; the factor `nee` below turns p_1 into the density next-event
     // estimation actually sampled it with (the visible cone of a sphere light). Russian roulette
     // stays out of the densities: the weights still sum to 1 over the strategies of every path,
     // which is all unbiasedness needs (Veach 1997, §9.2.2, eq. 9.6).
-    if (s == 1) y[0] = {pdfLightOriginA(ctx, *qs), 0.f, false};  // pdfRevA: set below (the light sub-path may be empty)
+    if (s == 1) y.end.pdfFwdA = d.qsOriginA;
+    else if (s >= 2) y.end = misVertexOf(*qs);
+    if (s >= 2) y.next = misVertexOf(light[size_t(s - 2)]);
+    y.prefix = s >= 3 ? light[size_t(s - 3)].misPrefix : 0.0;
+    y.nextPrevDelta = s >= 3 ? light[size_t(s - 3)].delta : lightIsDelta;
+    z.end = misVertexOf(*pt);
+    if (t >= 2) z.next = misVertexOf(camera[size_t(t - 2)]);
+    z.prefix = t >= 3 ? camera[size_t(t - 3)].misPrefix : 0.0;
+    z.nextPrevDelta = t >= 3 && camera[size_t(t - 3)].delta;
     // The connection's endpoints scatter into the connection through a non-delta lobe, whatever lobe
     // their own walk sampled there (pbrt-v3's MISWeight resets them too); a camera endpoint on an
     // emitter acts as the light vertex y0 of strategy s = 1: never delta either.
-    if (s > 0) y[size_t(s - 1)].delta = false;
-    z[size_t(t - 1)].delta = false;
+    y.end.delta = false;
+    z.end.delta = false;
+    // The four densities the connection changes (pbrt-v3 §16.3.4's "pdfRev" updates).
+    z.end.pdfRevA = d.ptRevA;
+    if (t >= 2) z.next.pdfRevA = d.ptMinusRevA;
+    if (s >= 1) y.end.pdfRevA = d.qsRevA;
+    if (s >= 2) y.next.pdfRevA = d.qsMinusRevA;
 
-    // The four densities the connection changes (pbrt-v3 §16.3.4's "pdfRev" updates):
-    // z(t−1) sampled from the light side: from y(s−1) (given y(s−2)), or as an emitter origin;
-    // y(s−2) sampled from y(s−1) given z(t−1) (the same vertex pair: one call for both).
-    if (s == 0) z[size_t(t - 1)].pdfRevA = pdfLightOriginA(ctx, *pt);
-    else if (qsMinus) pdfBothWaysA(ctx, *qsMinus, *qs, *pt, z[size_t(t - 1)].pdfRevA, y[size_t(s - 2)].pdfRevA);
-    else z[size_t(t - 1)].pdfRevA = pdfNextA(ctx, nullptr, *qs, *pt);
-    // y(s−1) sampled from z(t−1) given z(t−2); z(t−2) sampled from z(t−1) given y(s−1), or emitted
-    // from z(t−1) when it lies on a light.
-    if (s == 0) {
-        if (ptMinus) z[size_t(t - 2)].pdfRevA = pdfLightDirectionA(ctx, *pt, *ptMinus);
-    } else if (ptMinus) {
-        pdfBothWaysA(ctx, *ptMinus, *pt, *qs, y[size_t(s - 1)].pdfRevA, z[size_t(t - 2)].pdfRevA);
-    } else {
-        y[size_t(s - 1)].pdfRevA = pdfNextA(ctx, nullptr, *pt, *qs);
-    }
-
-    bool lightIsDelta = false;
     float nee = 1.f;  // p_NEE / p_origin of x0 given x1, for the strategy s = 1 of this path
-    if (s > 0) {
-        const PathVertex& y0 = s == 1 ? *qs : light[0];
-        lightIsDelta = ctx.scene.lights().isDelta(y0.lightIndex);  // point, spot, directional: never hit
-        nee = neeOverOriginA(ctx, y0, s == 1 ? *pt : light[1]);
-    } else if (ptMinus) {
-        nee = neeOverOriginA(ctx, *pt, *ptMinus);
-    }
-    return bdptMisWeight({y.data(), size_t(s)}, {z.data(), size_t(t)}, lightIsDelta, heuristic, nee);
+    if (s > 0) nee = neeOverOriginA(ctx, s == 1 ? *qs : light[0], s == 1 ? *pt : light[1]);
+    else if (t >= 2) nee = neeOverOriginA(ctx, *pt, camera[size_t(t - 2)]);
+    return bdptMisWeightFromEnds(y, z, lightIsDelta, heuristic, nee);
 }
+
+namespace {
+
+/// s = 0: the camera sub-path found an emitter at z(t−1): C = α_E · Le (Veach eq. 10.8 with s = 0).
+ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const PathVertex> camera, int t, MisHeuristic heuristic,
+                                   bool computeWeight) {
+    const PathVertex& pt = camera[size_t(t - 1)];
+    ConnectionResult r;
+    r.L = pt.beta * emittedAt(ctx, pt);
+    if (isBlack(r.L)) return ConnectionResult{};
+    r.weight = computeWeight ? bdptStrategyWeight(ctx, {}, camera, 0, t, nullptr, &pt, heuristic) : 1.f;
+    return r;
+}
+
+/// t = 1 (light tracing): y(s−1) joined to a resampled lens point; the contribution lands on
+/// another pixel.
+ConnectionResult connectLens(const RenderContext& ctx, std::span<const PathVertex> light, int s, Sampler& sampler,
+                             MisHeuristic heuristic, bool computeWeight) {
+    ConnectionResult r;
+    if (size_t(s) > light.size()) return r;
+    const PathVertex& qs = light[size_t(s - 1)];
+    if (!qs.connectible()) return r;
+    CameraSample cs;
+    if (!ctx.camera.sampleIncoming(qs.p, sampler.get2D(), cs)) return r;
+    PathVertex lens;
+    lens.type = VertexType::Camera;
+    lens.p = cs.pLens;
+    lens.ng = lens.ns = ctx.camera.forward();
+    lens.beta = Rgb(cs.We / cs.pdfW);
+    const Vec3f w = directionTo(qs, lens);
+    if (w == Vec3f(0.f)) return r;
+    // A surface end's BSDF serves f here and the two densities of its weight (one frame, one copy).
+    const bool surface = qs.type == VertexType::Surface;
+    std::optional<SurfaceBsdf> bsdf;
+    if (surface) bsdf.emplace(qs.bsdf, qs.ns, qs.ng);
+    Rgb f = surface ? bsdf->eval(qs.woWorld, w, TransportMode::Importance) : evalVertexTowards(ctx, qs, w, TransportMode::Importance);
+    r.L = qs.beta * f * lens.beta * cosAt(qs, cs.wiWorld);
+    if (isBlack(r.L) || !unoccluded(ctx, qs, lens)) return ConnectionResult{};
+    attenuateEdge(ctx, r.L, qs, lens);
+    if (isBlack(r.L)) return ConnectionResult{};
+    r.raster = cs.raster;
+    r.weight = 1.f;
+    if (computeWeight) {
+        ConnectionDensities d;
+        if (surface && s >= 2) {
+            pdfBothWaysA(ctx, *bsdf, light[size_t(s - 2)], qs, lens, d.ptRevA, d.qsMinusRevA);
+            d.qsRevA = pdfNextA(ctx, nullptr, lens, qs);
+        } else {
+            d = connectionDensities(ctx, light, {&lens, 1}, s, 1, &qs, &lens);
+        }
+        r.weight = bdptStrategyWeight(ctx, light, {&lens, 1}, s, 1, &qs, &lens, d, heuristic);
+    }
+    return r;
+}
+
+/// s = 1 (next-event estimation): a light point resampled from z(t−1), exactly as ptnee samples it
+/// (integrators/next_event.h).
+ConnectionResult connectLight(const RenderContext& ctx, std::span<const PathVertex> camera, int t, Sampler& sampler,
+                              MisHeuristic heuristic, bool computeWeight) {
+    ConnectionResult r;
+    const PathVertex& pt = camera[size_t(t - 1)];
+    NextEventSample ne;
+    if (!pt.connectible() || !sampleNextEvent(ctx.scene.lights(), pt.p, pt.ng, pt.woWorld, sampler, ne)) return r;
+    const LightSample& ls = ne.light;
+    PathVertex y0;
+    y0.type = VertexType::Light;
+    y0.p = ls.p;
+    y0.atInfinity = ls.isInfinite;
+    y0.ng = y0.ns = ls.isInfinite ? ls.wi : ls.n;
+    y0.lightIndex = ls.index;
+    y0.bary = ls.bary;
+    // Radiance (area, environment), I/d² (point, spot) or E (directional) over the NEE density.
+    y0.beta = ls.Le / ls.pdfW;
+    const Vec3f w = directionTo(pt, y0);
+    if (w == Vec3f(0.f)) return r;
+    // z(t−1) is a surface (connectible, t ≥ 2): its BSDF serves f and its two densities.
+    SurfaceBsdf bsdf(pt.bsdf, pt.ns, pt.ng);
+    r.L = pt.beta * bsdf.eval(pt.woWorld, w, TransportMode::Radiance) * y0.beta * cosAt(pt, ls.wi);
+    if (isBlack(r.L) || !lightVisible(ctx.accel, pt.p, pt.ng, ls)) return ConnectionResult{};
+    attenuateEdge(ctx, r.L, pt, y0);
+    if (isBlack(r.L)) return ConnectionResult{};
+    r.weight = 1.f;
+    if (computeWeight) {
+        ConnectionDensities d;
+        pdfLightBothA(ctx, y0, pt, d.qsOriginA, d.ptRevA);
+        pdfBothWaysA(ctx, bsdf, camera[size_t(t - 2)], pt, y0, d.qsRevA, d.ptMinusRevA);
+        r.weight = bdptStrategyWeight(ctx, {}, camera, 1, t, &y0, &pt, d, heuristic);
+    }
+    return r;
+}
+
+/// General connection (Veach eq. 10.8): α_L · f(y(s−1)) · G · f(z(t−1)) · α_E, both ends surfaces
+/// (s ≥ 2 and t ≥ 2: every vertex after a sub-path's first is one).
+ConnectionResult connectVertices(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
+                                 int s, int t, MisHeuristic heuristic, bool computeWeight) {
+    ConnectionResult r;
+    const PathVertex& qs = light[size_t(s - 1)];
+    const PathVertex& pt = camera[size_t(t - 1)];
+    if (!qs.connectible() || !pt.connectible()) return r;
+    Vec3f w = pt.p - qs.p;
+    float dist2 = glm::dot(w, w);
+    if (!(dist2 > 0.f)) return r;
+    Vec3f wn = w / std::sqrt(dist2);
+    float G = cosAt(qs, wn) * cosAt(pt, wn) / dist2;
+    // Each end's BSDF is built once: f here, and the two densities of the weight below. A third of
+    // these connections leave an end on a side its BSDF does not scatter to: the other is skipped.
+    SurfaceBsdf bsdfPt(pt.bsdf, pt.ns, pt.ng);
+    Rgb fPt = bsdfPt.eval(pt.woWorld, -wn, TransportMode::Radiance);
+    if (isBlack(fPt)) return r;
+    SurfaceBsdf bsdfQs(qs.bsdf, qs.ns, qs.ng);
+    r.L = qs.beta * bsdfQs.eval(qs.woWorld, wn, TransportMode::Importance) * G * fPt * pt.beta;
+    if (isBlack(r.L) || !unoccluded(ctx, qs, pt)) return ConnectionResult{};
+    attenuateEdge(ctx, r.L, qs, pt);
+    if (isBlack(r.L)) return ConnectionResult{};
+    r.weight = 1.f;
+    if (computeWeight) {
+        ConnectionDensities d;
+        pdfBothWaysA(ctx, bsdfQs, light[size_t(s - 2)], qs, pt, d.ptRevA, d.qsMinusRevA);
+        pdfBothWaysA(ctx, bsdfPt, camera[size_t(t - 2)], pt, qs, d.qsRevA, d.ptMinusRevA);
+        r.weight = bdptStrategyWeight(ctx, light, camera, s, t, &qs, &pt, d, heuristic);
+    }
+    return r;
+}
+
+}  // namespace
 
 ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
                              int s, int t, Sampler& sampler, MisHeuristic heuristic, bool computeWeight) {
-    ConnectionResult r;
-    if (t < 1 || s + t < 2) return r;
+    if (t < 1 || s + t < 2) return {};
     sampler.startConnection(s, t);
-    PathVertex sampled;  // the resampled endpoint for s = 1 or t = 1
-    // For s = 1 the light point is resampled below: the light sub-path may even be empty.
-    const PathVertex* qs = s > 0 && size_t(s) <= light.size() ? &light[size_t(s - 1)] : nullptr;
-    const PathVertex* pt = &camera.data()[t - 1];  // not dereferenced when t = 1 (replaced below)
-
-    if (s == 0) {
-        // The camera sub-path found an emitter: C = α_E · Le (Veach eq. 10.8 with s = 0).
-        r.L = pt->beta * emittedAt(ctx, *pt);
-    } else if (t == 1) {
-        // Light tracing: connect y(s−1) to a lens point; the contribution lands on another pixel.
-        if (!qs || !qs->connectible()) return r;
-        CameraSample cs;
-        if (!ctx.camera.sampleIncoming(qs->p, sampler.get2D(), cs)) return r;
-        sampled.type = VertexType::Camera;
-        sampled.p = cs.pLens;
-        sampled.ng = sampled.ns = ctx.camera.forward();
-        sampled.beta = Rgb(cs.We / cs.pdfW);
-        Rgb f = evalVertex(ctx, *qs, sampled, TransportMode::Importance);
-        r.L = qs->beta * f * sampled.beta * cosAt(*qs, cs.wiWorld);
-        if (isBlack(r.L) || !unoccluded(ctx, *qs, sampled)) return ConnectionResult{};
-        attenuateEdge(ctx, r.L, *qs, sampled);
-        r.raster = cs.raster;
-        pt = &sampled;
-    } else if (s == 1) {
-        // Next-event estimation: resample the light point from z(t−1), exactly as ptnee samples it
-        // (integrators/next_event.h).
-        NextEventSample ne;
-        if (!pt->connectible() || !sampleNextEvent(ctx.scene.lights(), pt->p, pt->ng, pt->woWorld, sampler, ne)) return r;
-        const LightSample& ls = ne.light;
-        sampled.type = VertexType::Light;
-        sampled.p = ls.p;
-        sampled.atInfinity = ls.isInfinite;
-        sampled.ng = sampled.ns = ls.isInfinite ? ls.wi : ls.n;
-        sampled.lightIndex = ls.index;
-        sampled.bary = ls.bary;
-        // Radiance (area, environment), I/d² (point, spot) or E (directional) over the NEE density.
-        sampled.beta = ls.Le / ls.pdfW;
-        Rgb f = evalVertex(ctx, *pt, sampled, TransportMode::Radiance);
-        r.L = pt->beta * f * sampled.beta * cosAt(*pt, ls.wi);
-        if (isBlack(r.L) || !lightVisible(ctx.accel, pt->p, pt->ng, ls)) return ConnectionResult{};
-        attenuateEdge(ctx, r.L, *pt, sampled);
-        qs = &sampled;
-    } else {
-        // General connection (Veach eq. 10.8): α_L · f(y) · G · f(z) · α_E.
-        if (!qs->connectible() || !pt->connectible()) return r;
-        Vec3f w = pt->p - qs->p;
-        float dist2 = glm::dot(w, w);
-        if (!(dist2 > 0.f)) return r;
-        Vec3f wn = w / std::sqrt(dist2);
-        float G = cosAt(*qs, wn) * cosAt(*pt, wn) / dist2;
-        r.L = qs->beta * evalVertexTowards(ctx, *qs, wn, TransportMode::Importance) * G *
-              evalVertexTowards(ctx, *pt, -wn, TransportMode::Radiance) * pt->beta;
-        if (isBlack(r.L) || !unoccluded(ctx, *qs, *pt)) return ConnectionResult{};
-        attenuateEdge(ctx, r.L, *qs, *pt);
-    }
-    if (isBlack(r.L)) return ConnectionResult{};
-    r.weight = computeWeight ? bdptStrategyWeight(ctx, light, camera, s, t, qs, pt, heuristic) : 1.f;
-    return r;
+    if (s == 0) return connectEmitterHit(ctx, camera, t, heuristic, computeWeight);
+    if (t == 1) return connectLens(ctx, light, s, sampler, heuristic, computeWeight);
+    // For s = 1 the light point is resampled: the light sub-path may even be empty.
+    if (s == 1) return connectLight(ctx, camera.first(size_t(t)), t, sampler, heuristic, computeWeight);
+    return connectVertices(ctx, light, camera, s, t, heuristic, computeWeight);
 }
 
 }  // namespace tessera

@@ -27,10 +27,34 @@ ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVerte
                              std::span<const PathVertex> camera, int s, int t, Sampler& sampler,
                              MisHeuristic heuristic, bool computeWeight = true);
 
+/// Fills PathVertex::misPrefix along both sub-paths (bdpt_mis.h's M_j): once per sample, after
+/// both walks, before any weight of the sample is computed; O(s + t), so that every weight is O(1).
+void bdptMisPrefixes(const RenderContext& ctx, std::span<PathVertex> light, std::span<PathVertex> camera, MisHeuristic heuristic);
+
+/// The densities a connection changes (pbrt-v3 §16.3.4's "pdfRev" updates, Veach 1997, §10.2), all
+/// area densities, with y(s−1) = `qs` and z(t−1) = `pt` the endpoints actually used.
+struct ConnectionDensities {
+    float ptRevA = 0.f;       ///< z(t−1) sampled from the light side: from y(s−1), or as an emitter's origin (s = 0)
+    float ptMinusRevA = 0.f;  ///< z(t−2) sampled from z(t−1) given y(s−1), or emitted from z(t−1) (s = 0)
+    float qsRevA = 0.f;       ///< y(s−1) sampled from z(t−1) given z(t−2)
+    float qsMinusRevA = 0.f;  ///< y(s−2) sampled from y(s−1) given z(t−1)
+    float qsOriginA = 0.f;    ///< s = 1 only: the resampled y0's density as a light sub-path's origin
+};
+
+/// The densities of strategy (s, t) evaluated from the vertices (each BSDF built anew); connectBdpt
+/// computes the same numbers with the BSDFs it built to evaluate f.
+ConnectionDensities connectionDensities(const RenderContext& ctx, std::span<const PathVertex> light,
+                                        std::span<const PathVertex> camera, int s, int t, const PathVertex* qs,
+                                        const PathVertex* pt);
+
 /// The MIS weight of strategy (s, t) given the connection endpoints actually used: `qs` replaces
 /// y(s−1) and `pt` replaces z(t−1) (they differ from the stored ones when resampled, s = 1 or
-/// t = 1). Recomputes the four densities the connection changes (pdfRevA of y(s−1), y(s−2),
-/// z(t−1), z(t−2)) and calls bdptMisWeight.
+/// t = 1). Combines the connection's densities with the sub-paths' prefixes in O(1)
+/// (bdptMisWeightFromEnds; bdptMisPrefixes must have run on the sub-paths).
+float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
+                         int s, int t, const PathVertex* qs, const PathVertex* pt, const ConnectionDensities& densities,
+                         MisHeuristic heuristic);
+/// The same with the densities evaluated by connectionDensities.
 float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
                          int s, int t, const PathVertex* qs, const PathVertex* pt, MisHeuristic heuristic);
 

@@ -49,4 +49,39 @@ enum class MisHeuristic { Balance, Power };
 float bdptMisWeight(std::span<const MisVertex> light, std::span<const MisVertex> camera, bool lightIsDelta,
                     MisHeuristic heuristic, float neeOverOriginA = 1.f);
 
+/// The same weight in O(1) per strategy: the recursive form of the sums above (Georgiev et al.
+/// 2012, "Light transport simulation with vertex connection and merging", and its technical report
+/// I. Georgiev, "Implementing Vertex Connection and Merging", 2012: the quantities dVC/dVCM carried
+/// along each sub-path, initialised by eqs. 31–33, updated per vertex by eqs. 34–36 and combined
+/// into a connection's weight by eqs. 37–41). On a sub-path v_0 … v_(n−1) (sampling order) let
+/// r_j = (pdfRevA_j / pdfFwdA_j)^β and
+///     M_j = r_j · (c_j g_j + M_(j−1)),   M_(−1) = 0,                                  (†)
+/// with c_j = 1 when the strategy connecting v_(j−1) and v_j exists (neither is delta; for y0: the
+/// light is not a delta in position; for the lens z0: never) and g_j the s = 1 factor
+/// neeOverOriginA^β at y1 (1 elsewhere). Walking away from the connection, the sub-path's share of
+/// Σ_{i≠s} (p_i / p_s)^β is the term of v_(n−1), that of v_(n−2), and r_(n−1) r_(n−2) · M_(n−3)
+/// for all the strategies further out. Only v_(n−1) and v_(n−2) have densities the connection
+/// changes, so every M_j further out is fixed once the walks are done: misPrefixStep computes (†)
+/// per vertex and bdptMisWeightFromEnds adds the two updated vertices of each side. The same sums as
+/// the loop form, added in another order (double precision, as the loop).
+/// g_1 of (†): neeOverOriginA^β (1 where it is not positive).
+double misNeeFactor(float neeOverOriginA, MisHeuristic heuristic);
+/// M_j of (†) from M_(j−1) = `prefixBefore`, the vertex's densities, c_j and g_j.
+double misPrefixStep(double prefixBefore, const MisVertex& v, bool connectibleTerm, double g, MisHeuristic heuristic);
+
+/// The last vertices of one sub-path as a strategy's weight needs them: `end` = v(n−1) and
+/// `next` = v(n−2) with the densities the connection changes already updated, `prefix` = M_(n−3)
+/// (0 when n < 3) and `nextPrevDelta` whether v(n−3) is delta (for the light sub-path with n = 2:
+/// whether the light is a delta in position; for the camera sub-path with n = 2: false).
+struct MisEnds {
+    int n = 0;  ///< vertices of the sub-path in the strategy (s or t)
+    MisVertex end, next;
+    double prefix = 0.0;
+    bool nextPrevDelta = false;
+};
+
+/// bdptMisWeight from the sub-paths' ends: O(1). `light.n` = s, `camera.n` = t.
+float bdptMisWeightFromEnds(const MisEnds& light, const MisEnds& camera, bool lightIsDelta, MisHeuristic heuristic,
+                            float neeOverOriginA = 1.f);
+
 }  // namespace tessera

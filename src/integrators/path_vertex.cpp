@@ -1,5 +1,7 @@
 #include "integrators/path_vertex.h"
 
+#include <optional>
+
 #include "integrators/russian_roulette.h"
 #include "integrators/volume.h"
 
@@ -40,21 +42,30 @@ float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVerte
 
 void pdfBothWaysA(const RenderContext& ctx, const PathVertex& a, const PathVertex& cur, const PathVertex& b, float& pdfToBA,
                   float& pdfToAA) {
+    if (cur.type != VertexType::Surface) {
+        pdfToBA = pdfNextA(ctx, &a, cur, b);
+        pdfToAA = pdfNextA(ctx, &b, cur, a);
+        return;
+    }
+    pdfBothWaysA(ctx, SurfaceBsdf(cur.bsdf, cur.ns, cur.ng), a, cur, b, pdfToBA, pdfToAA);
+}
+
+void pdfBothWaysA(const RenderContext& ctx, const SurfaceBsdf& bsdfAtCur, const PathVertex& a, const PathVertex& cur,
+                  const PathVertex& b, float& pdfToBA, float& pdfToAA) {
     // The same directions, frame, side test and BSDF inputs serve both densities: one SurfaceBsdf,
     // and each segment's length computed once for its direction and its solid-angle-to-area factor.
     // The arithmetic is that of directionTo and convertDensity, so the densities are bit-identical
     // to two pdfNextA calls. Vertices at infinity and coincident points take the general route.
     Vec3f db = b.p - cur.p, da = a.p - cur.p;
     float dist2B = glm::dot(db, db), dist2A = glm::dot(da, da);
-    if (cur.type != VertexType::Surface || a.atInfinity || b.atInfinity || !(dist2A > 0.f) || !(dist2B > 0.f)) {
+    if (a.atInfinity || b.atInfinity || !(dist2A > 0.f) || !(dist2B > 0.f)) {
         pdfToBA = pdfNextA(ctx, &a, cur, b);
         pdfToAA = pdfNextA(ctx, &b, cur, a);
         return;
     }
     float lenB = std::sqrt(dist2B), lenA = std::sqrt(dist2A);
-    SurfaceBsdf bsdf(cur.bsdf, cur.ns, cur.ng);
     float pdfToBW, pdfToAW;
-    bsdf.pdfBothW(da / lenA, db / lenB, pdfToBW, pdfToAW);
+    bsdfAtCur.pdfBothW(da / lenA, db / lenB, pdfToBW, pdfToAW);
     pdfToBA = pdfToBW / dist2B;
     if (b.onSurface()) pdfToBA *= std::abs(glm::dot(b.ng, db)) / lenB;
     pdfToAA = pdfToAW / dist2A;
@@ -87,6 +98,19 @@ float pdfLightDirectionA(const RenderContext& ctx, const PathVertex& v, const Pa
     float pdfPosA, pdfDirW;
     lights.pdfEmission(v.lightIndex, v.ng, w, pdfPosA, pdfDirW);
     return convertDensity(pdfDirW, v, next);
+}
+
+void pdfLightBothA(const RenderContext& ctx, const PathVertex& v, const PathVertex& next, float& originA, float& towardsNextA) {
+    if (v.lightIndex == kInvalidId || v.atInfinity || next.atInfinity) {
+        originA = pdfLightOriginA(ctx, v);
+        towardsNextA = pdfLightDirectionA(ctx, v, next);
+        return;
+    }
+    // One pdfEmission call for both (its pdfPosA does not depend on the direction).
+    Vec3f w = directionTo(v, next);
+    float pdfDirW;
+    ctx.scene.lights().pdfEmission(v.lightIndex, v.ng, w, originA, pdfDirW);
+    towardsNextA = w == Vec3f(0.f) ? 0.f : convertDensity(pdfDirW, v, next);
 }
 
 namespace {
@@ -151,6 +175,9 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
     const Scene& scene = ctx.scene;
     float rrScale = 1.f;  // product of BSDF weights (and η² for radiance): what Russian roulette looks at
     int limit = maxVertices < 0 ? kMaxSubpathVertices : std::min(maxVertices, kMaxSubpathVertices);
+    // The BSDF the last surface vertex sampled its direction with: the next vertex's two densities
+    // at that vertex come from the same object (no second frame and copy per vertex).
+    std::optional<SurfaceBsdf> lastBsdf;
     while (int(out.size()) < limit) {
         Hit hit;
         // The camera ray (a camera subpath's first segment) follows its neighbours: the coherent kernel.
@@ -201,14 +228,14 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
             v.pdfFwdA = deltaDensityA(prev, v);
             if (n >= 2) out[n - 2].pdfRevA = deltaDensityA(prev, out[n - 2]);
         } else if (n >= 2) {
-            pdfBothWaysA(ctx, out[n - 2], prev, v, v.pdfFwdA, out[n - 2].pdfRevA);
+            pdfBothWaysA(ctx, *lastBsdf, out[n - 2], prev, v, v.pdfFwdA, out[n - 2].pdfRevA);  // prev: a surface
         } else {
             v.pdfFwdA = pdfNextA(ctx, nullptr, prev, v);
         }
         if (!found || int(out.size()) >= limit) break;
 
         PathVertex& cur = out.back();
-        SurfaceBsdf bsdf(cur.bsdf, cur.ns, cur.ng);
+        const SurfaceBsdf& bsdf = lastBsdf.emplace(cur.bsdf, cur.ns, cur.ng);
         SurfaceBsdfSample bs;
         if (mode == TransportMode::Radiance) sampler.startBounce(int(out.size()) - 2);
         else sampler.startLightBounce(int(out.size()) - 2);

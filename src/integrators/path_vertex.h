@@ -39,6 +39,9 @@ struct PathVertex {
     bool atInfinity = false;  ///< an infinite light's vertex (environment, directional): `ng` is its direction
     float pdfFwdA = 0.f;  ///< area density; solid angle for a vertex at infinity
     float pdfRevA = 0.f;
+    /// BDPT's MIS prefix M_j through this vertex (bdpt_mis.h, eq. (†)); filled by bdptMisPrefixes
+    /// once both sub-paths are traced.
+    double misPrefix = 0.0;
 
     /// True where densities convert with the cosine at the vertex: surfaces and area-light points.
     bool onSurface() const {
@@ -84,6 +87,9 @@ float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVerte
 /// weights need both densities of the same vertex pair).
 void pdfBothWaysA(const RenderContext& ctx, const PathVertex& a, const PathVertex& cur, const PathVertex& b, float& pdfToBA,
                   float& pdfToAA);
+/// pdfBothWaysA at a surface vertex whose BSDF a connection already built (to evaluate f there).
+void pdfBothWaysA(const RenderContext& ctx, const SurfaceBsdf& bsdfAtCur, const PathVertex& a, const PathVertex& cur,
+                  const PathVertex& b, float& pdfToBA, float& pdfToAA);
 /// For a vertex on an emitter (light vertex, or a surface vertex with lightIndex): pdfPosA of the
 /// light sub-path starting there (selection included); for a vertex at infinity the solid-angle
 /// density of its direction (selection included).
@@ -91,6 +97,9 @@ float pdfLightOriginA(const RenderContext& ctx, const PathVertex& v);
 /// For a vertex on an emitter: area density at `next` of the emitted direction towards `next`; for a
 /// vertex at infinity the emission disk's 1/(π r²) times the cosine at `next`.
 float pdfLightDirectionA(const RenderContext& ctx, const PathVertex& v, const PathVertex& next);
+
+/// pdfLightOriginA(v) and pdfLightDirectionA(v, next) at once, bit-identical to the two calls.
+void pdfLightBothA(const RenderContext& ctx, const PathVertex& v, const PathVertex& next, float& originA, float& towardsNextA);
 
 /// Beer–Lambert transmittance of the segment between two vertices (integrators/volume.h): the one
 /// rule every strategy applies to the same segment (random walks, connections, NEE, lens

@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# CPU time per sample of `bdpt` against `ptnee` (the issue #18 speed ratio), robust to a loaded machine.
+#
+#   tools/bench_bdpt_speed.sh [--scene GLTF] [--rounds N] [--cpu C] [BINARY ...]
+#
+# For each round and each binary (default build/src/tessera; give several to compare builds in the
+# same minutes), renders the scene with `bdpt` then `ptnee`, one thread pinned to core C, at 256²
+# with 1 and 9 spp, and takes (CPU₉ − CPU₁) / (8 · 256²): user + sys time, so that start-up, loading
+# and output cancel and the load of other processes does not count (wall clock would measure it).
+# Both integrators run with unlimited depth (Russian roulette), i.e. equal maximum path length.
+# Prints one line per round and binary, then per binary the median and range of the ratio
+# ptnee µs / bdpt µs (= bdpt's samples/s over ptnee's).
+set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+SCENE=$ROOT/scenes/cornell-box/cornell-box.gltf
+ROUNDS=5
+CPU=1
+BINS=()
+while [ $# -gt 0 ]; do
+    case $1 in
+    --scene) SCENE=$2; shift ;;
+    --rounds) ROUNDS=$2; shift ;;
+    --cpu) CPU=$2; shift ;;
+    -*) echo "bench_bdpt_speed.sh: unknown option '$1' (see the header of $0)" >&2; exit 2 ;;
+    *) BINS+=("$1") ;;
+    esac
+    shift
+done
+[ ${#BINS[@]} -gt 0 ] || BINS=("$ROOT/build/src/tessera")
+for b in "${BINS[@]}"; do [ -x "$b" ] || { echo "bench_bdpt_speed.sh: $b is not an executable" >&2; exit 2; }; done
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+
+cpu() {  # binary integrator spp: prints CPU seconds
+    /usr/bin/time -f "%U %S" -o "$TMP/time" taskset -c "$CPU" "$1" render "$SCENE" --integrator "$2" --threads 1 \
+        --resolution 256x256 --spp "$3" --no-png --quiet -o "$TMP/out.exr" > /dev/null
+    awk '{print $1 + $2}' "$TMP/time"
+}
+usPerSample() {  # binary integrator
+    local t1 t9
+    t1=$(cpu "$1" "$2" 1)
+    t9=$(cpu "$1" "$2" 9)
+    awk -v a="$t9" -v b="$t1" 'BEGIN { printf "%.3f", (a - b) / (8 * 65536) * 1e6 }'
+}
+
+declare -A RATIOS
+for r in $(seq "$ROUNDS"); do
+    for i in "${!BINS[@]}"; do
+        b=${BINS[$i]}
+        ub=$(usPerSample "$b" bdpt)
+        up=$(usPerSample "$b" ptnee)
+        ratio=$(awk -v p="$up" -v q="$ub" 'BEGIN { printf "%.3f", p / q }')
+        RATIOS[$i]="${RATIOS[$i]:-} $ratio"
+        echo "round $r  $b  bdpt $ub µs  ptnee $up µs  ratio $ratio"
+    done
+done
+for i in "${!BINS[@]}"; do
+    echo "${BINS[$i]}: ptnee/bdpt ratio $(echo "${RATIOS[$i]}" | tr ' ' '\n' | sort -n | awk 'NF { a[n++] = $1 }
+        END { m = n % 2 ? a[int(n / 2)] : (a[n / 2 - 1] + a[n / 2]) / 2; printf "median %.3f, range %.3f–%.3f over %d rounds", m, a[0], a[n - 1], n }')"
+done
