@@ -177,19 +177,27 @@ def render_command(method, scene, res, spp, seed, out, threads):
                 "--spp", str(spp), "--seed", str(seed), "--resolution", res, "--threads", str(threads)]
     return [os.path.relpath(TESSERA, ROOT), "render", scene, "--integrator", method, "--sampler", "independent",
             "--spp", str(spp), "--seed", str(seed), "--resolution", res, "--max-depth", "-1", "--no-png", "--quiet",
-            "--json", "--threads", str(threads), "-o", out] + (["--allow-external-files"] if os.path.isabs(scene) else [])
+            "--json", "--threads", str(threads), "-o", out]
 
 
 def run_render(method, scene, res, spp, seed, out, threads):
     """Renders one image to `out` (atomically); returns (seconds, command template)."""
     cmd = render_command(method, scene, res, spp, seed, out + ".tmp.exr", threads)
     argv = ["nice", "-n", "19"] + ([RUN_BINARY] + cmd[1:] if method != "cycles" else cmd)
-    r = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True)
+    env = dict(os.environ)
+    if method == "cycles":
+        # Blender's Python finds its modules (numpy) through the system interpreter: keep a pyenv or
+        # virtualenv python3 earlier on PATH from standing in for it.
+        env["PATH"] = os.pathsep.join(p for p in env.get("PATH", "").split(os.pathsep)
+                                      if ".pyenv" not in p and "virtualenv" not in p and p != os.environ.get("VIRTUAL_ENV"))
+    r = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, env=env)
     if r.returncode != 0:
         raise RuntimeError("render failed (%s):\n%s%s" % (" ".join(cmd), r.stdout[-2000:], r.stderr[-2000:]))
     if method == "cycles":
-        line = [l for l in r.stdout.splitlines() if l.startswith("cycles-json ")][-1]
-        seconds = json.loads(line[len("cycles-json "):])["seconds"]
+        lines = [l for l in r.stdout.splitlines() if l.startswith("cycles-json ")]
+        if not lines or not os.path.exists(out + ".tmp.exr"):
+            raise RuntimeError("Cycles failed (%s):\n%s%s" % (" ".join(cmd), r.stdout[-3000:], r.stderr[-2000:]))
+        seconds = json.loads(lines[-1][len("cycles-json "):])["seconds"]
     else:
         info = json.loads(r.stdout.strip().splitlines()[-1])
         seconds = info["seconds"]
@@ -207,7 +215,7 @@ def settings_key(name, spec, scale):
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 
-def direct_delta_scene(scene, tmpdir):
+def direct_delta_scene(scene):
     """A copy of the scene whose mirror and glass (delta) surfaces glow white (1) and everything else
     is black without lights: its render is each pixel's coverage by delta surfaces the camera sees
     directly, where light tracing (lt) cannot reach the camera."""
@@ -227,11 +235,9 @@ def direct_delta_scene(scene, tmpdir):
     for n in g.get("nodes", []):
         n.get("extensions", {}).pop("KHR_lights_punctual", None)
     g.get("extensions", {}).pop("TESSERA_environment", None)
-    base = os.path.dirname(os.path.join(ROOT, scene))
-    for b in g.get("buffers", []) + g.get("images", []):
-        if "uri" in b and not b["uri"].startswith("data:"):
-            b["uri"] = os.path.join(base, b["uri"])
-    out = os.path.join(tmpdir, "direct-delta.gltf")
+    # Beside the scene (hidden, removed after the render), so that its buffers resolve as they do for
+    # the scene itself.
+    out = os.path.join(os.path.dirname(os.path.join(ROOT, scene)), ".direct-delta-%d.gltf" % os.getpid())
     with open(out, "w") as f:
         json.dump(g, f)
     return out
@@ -291,13 +297,15 @@ def make_one(name, out_dir, threads, scale, budget):
     if spec["mask"] == "direct-delta":
         mpath = os.path.join(cache_dir, "direct-delta.exr")
         if not os.path.exists(mpath):
-            tmpdir = tempfile.mkdtemp(prefix="tessera-refs-mask-")
+            derived = direct_delta_scene(spec["scene"])
             try:
-                run_render("ptnee", direct_delta_scene(spec["scene"], tmpdir), spec["resolution"], 16, 1, mpath, threads)
+                run_render("ptnee", os.path.relpath(derived, ROOT), spec["resolution"], 16, 1, mpath, threads)
             finally:
-                shutil.rmtree(tmpdir, ignore_errors=True)
+                os.remove(derived)
         coverage = exr_io.read_exr(mpath)[0].max(axis=2)
-        mask = coverage <= 0.0  # pixels lt samples completely
+        # Pixels lt samples completely: no delta surface in them or their 8 neighbours (16 spp can
+        # miss a sliver of an edge pixel).
+        mask = st.box_blur(coverage[:, :, None], 1)[:, :, 0] <= 0.0
         for j, (m, _) in enumerate(methods):
             if m == "lt":
                 valid[j] = mask
@@ -421,6 +429,7 @@ def main(argv):
     shutil.copy2(TESSERA, RUN_BINARY)
     db_path = os.path.join(out_dir, "refs.json")
     db = make_refs_readme.load_db(db_path)
+    failed = []
     for name in names or list(SCENES):
         e = db.get(name, {})
         if (not force and e.get("settings") == settings_key(name, SCENES[name], scale) and e.get("complete") and
@@ -429,7 +438,12 @@ def main(argv):
             log("reference %s: up to date" % name)
             continue
         log("reference %s" % name)
-        entry = make_one(name, out_dir, threads, scale, budget)
+        try:
+            entry = make_one(name, out_dir, threads, scale, budget)
+        except (RuntimeError, OSError, ValueError) as err:
+            log("reference %s: FAILED, left as it was: %s" % (name, err))
+            failed.append(name)
+            continue
         db = make_refs_readme.load_db(db_path)  # another run may have finished a scene meanwhile
         db[name] = entry
         with open(db_path + ".tmp", "w") as f:
@@ -438,7 +452,9 @@ def main(argv):
         os.replace(db_path + ".tmp", db_path)
         if out_dir == REFS:
             make_refs_readme.write_readme(db)
-    return 0
+    if failed:
+        log("failed: " + " ".join(failed))
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":
