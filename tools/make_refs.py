@@ -376,7 +376,10 @@ def write_outputs(name, out_dir, entry, ref, ref_se, judged_se, judged, judged_s
         path = os.path.join(out_dir, name + suffix + ".exr")
         # An analytic reference stays float32: half would round 1/0.7 by 1e-4 relative (and it
         # compresses to nothing either way).
-        half = st.storage_type(img, is_se) == "half" and not (suffix == "" and entry["reference"] == "analytic")
+        analytic = suffix == "" and entry["reference"] == "analytic"
+        half = st.storage_type(img, is_se) == "half" and not analytic
+        if not half and not analytic:
+            img = st.round_to_half_precision(img)
         exr_io.write_exr(path, img, dict(attrs, **extra, **{"tessera:kind": kind}), half=half)
         sizes[os.path.basename(path)] = (os.path.getsize(path), "half" if half else "float")
     entry["files"] = {k: {"bytes": v[0], "type": v[1]} for k, v in sizes.items()}
