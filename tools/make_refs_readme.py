@@ -37,6 +37,17 @@ Regenerate (niced, resumable, hours of 2-core time for all): `python3 tools/make
 """
 
 
+# What the numbers alone do not say (read from the methods' renders; tools/make_refs_stats.py).
+NOTES = {
+    "furnace": "bdpt and ptnee agree with each other to 0.003%; both sit 0.01–0.06% above the analytic "
+               "value with Z up to 2.9 and only 97.7% of pixel channels within 3σ (8 and 16 spp per render: "
+               "the per-pixel σ of 8 renders underestimates these long, Russian-roulette-ended paths)",
+    "ring-caustic": "the largest bin |z| lies in the bottom rows (the floor nearest the camera), where lt's and "
+                    "bdpt's t = 1 splats are largest and rare: single pixels there are heavy-tailed in both "
+                    "(ptnee, which has no splats, is smooth there), so their σ from 8 renders is too small",
+}
+
+
 def load_db(path=None):
     path = path or os.path.join(REFS, "refs.json")
     if not os.path.exists(path):
@@ -46,24 +57,26 @@ def load_db(path=None):
 
 
 def _pct(x):
-    return "%+.2f%%" % (100 * x)
+    return "%+.3f%%" % (100 * x)
 
 
 def fmt_agreement(a):
-    return ("%s vs %s: mean %s (Z %s); %.1f%% px, %.1f%% bins within 3σ, max bin |z| %.1f" % (
+    return ("%s vs %s: mean %s (Z %s); %.1f%% px, %.1f%% bins within 3σ, largest bin \\|z\\| %.1f" % (
         a["a"], a["b"], "/".join(_pct(x) for x in a["mean_rel_diff"]), "/".join("%.1f" % z for z in a["mean_z"]),
         100 * a["within_3se"], 100 * a["bin_within_3se"], a["bin_max_abs_z"]))
 
 
 def row(name, e):
     if "methods" not in e:  # a reference of the previous scheme: one integrator, not independent
-        return ("| ![](thumbs/%s.png) `%s` | **not yet redone**: %s only, %d × %d spp | %s | — | — | %s |" % (
-            name, name, e["integrator"], e["renders"], e["spp"], e["resolution"],
-            "not independent (the judged integrator's own renders); " + e["why"]))
+        return ("| ![](thumbs/%s.png) `%s` | **not yet redone**: %s only, %d × %d spp | %s | — (not independent: the "
+                "judged integrator's own renders) | — | — | %s |" % (
+                    name, name, e["integrator"], e["renders"], e["spp"], e["resolution"], e["why"]))
     methods = ", ".join("%s %d × %d%s" % (m["method"], m["renders"], m["spp"],
                                            " (outside the mask)" if m["covers"] != "every pixel" else "")
                         for m in e["methods"])
     agree = "<br>".join(fmt_agreement(a) for a in e["agreement"])
+    if name in NOTES:
+        agree += "<br>" + NOTES[name].replace("|z|", "\\|z\\|")
     if "mask_pixels_excluded" in e:
         agree += "<br>mask: %.1f%% of pixels see a mirror or glass directly (lt cannot)" % (100 * e["mask_pixels_excluded"])
     size = sum(f["bytes"] for f in e.get("files", {}).values())
