@@ -33,6 +33,8 @@ Outputs (half-float RGB EXR, ZIP, where half holds the values: see make_refs_sta
     refs/NAME.exr                 the reference
     refs/NAME-stderr.exr          its standard error
     refs/NAME-JUDGED-stderr.exr   the judged integrator's standard error at the test resolution
+    refs/NAME-mask.exr            where a scene has a mask: 1 where every method samples well
+                                  (tools/study judges the scene there only)
     refs/thumbs/NAME.png, refs/refs.json (provenance, agreement), refs/README.md (the table)
 Every EXR carries its provenance as tessera:* attributes (commands, methods, seeds, git revision,
 scene hash). Tests and the convergence study must not use seeds 1000-2999 for their own renders.
@@ -351,6 +353,16 @@ def make_one(name, out_dir, threads, scale, budget):
                                                     valid[j] if methods[j][0] == "lt" else None),
                                        a=methods[0][0], b=methods[j][0]))
     write_outputs(name, out_dir, entry, ref, ref_se, judged_se, judged, judged_spp_total, f)
+    if mask is not None:
+        # The pixels every method samples well (1) and those seen directly in a mirror or through glass
+        # (0): tools/study judges the scene on the former only (refs/README.md says why).
+        m = np.repeat(mask[:, :, None].astype(float), 3, axis=2)
+        exr_io.write_exr(os.path.join(out_dir, name + "-mask.exr"), m,
+                         {"tessera:made_by": "tools/make_refs.py", "tessera:scene": spec["scene"],
+                          "tessera:kind": "1 = no mirror or glass seen directly in the pixel or its neighbours"},
+                         half=True)
+        entry["files"][name + "-mask.exr"] = {"bytes": os.path.getsize(os.path.join(out_dir, name + "-mask.exr")),
+                                              "type": "half"}
     return entry
 
 
