@@ -187,7 +187,14 @@ def study_scene(args, tess, ref, tmp, integrators, accels):
     summary = [s for s in (summarise(study, *k) for k in study.pooled) if s]
     if ref.stderr is None:
         notes.append(f"{ref.name}: no standard-error image for the reference: its noise is not subtracted.")
+    if study.mask is not None:
+        notes.append(mask_note(ref.name, study.mask))
     return {"runs": study.runs, "summary": summary, "floor": study.floor, "failures": study.failures, "notes": notes}
+
+
+def mask_note(name, mask):
+    return (f"{name}: judged on the {100 * mask.mean():.1f}% of pixels that refs/{name}-mask.exr keeps (no mirror "
+            f"or glass seen directly): every render and the reference are zeroed elsewhere before any metric.")
 
 
 def cache_key(args, ref, integrators, accels):
