@@ -97,9 +97,8 @@ SCENES = {
                                   "s=0 and s=1 strategies are absent from it"),
     "sds-caustic": S("scenes/sds-caustic/sds-caustic.gltf", "256x192", [("bdpt", 48), ("ptnee", 96)],
                      "the caustic seen in the mirror is an SDS path: only s=0 (hitting the light by BSDF sampling "
-                     "through the glass) samples it, in bdpt as in ptnee; lt cannot (the study judges the scene "
-                     "where no mirror or glass is seen directly: the direct-delta mask)",
-                     mask="direct-delta",
+                     "through the glass) samples it, in bdpt as in ptnee; lt cannot. The camera sees 93% of the "
+                     "image in the mirror, so no part is left to judge on alone: no method samples it well",
                      independent="ptnee is a different estimator (no light sub-paths, no MIS over s)"),
     "veach-mis": S("scenes/veach-mis/veach-mis.gltf", "288x192", [("bdpt", 32), ("ptnee", 64)],
                    "MIS between BSDF and light sampling is the point of the scene: bdpt and ptnee combine them",
