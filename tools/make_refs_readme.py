@@ -42,6 +42,9 @@ NOTES = {
     "furnace": "bdpt and ptnee agree with each other to 0.003%; both sit 0.01–0.06% above the analytic "
                "value with Z up to 2.9 and only 97.7% of pixel channels within 3σ (8 and 16 spp per render: "
                "the per-pixel σ of 8 renders underestimates these long, Russian-roulette-ended paths)",
+    "sds-caustic": "the caustic in the glass sphere's shadow, seen in the mirror that fills 93% of the view, is "
+                   "an SDS path that only s = 0 samples, in bdpt as in ptnee: the reference still shows its "
+                   "fireflies and its σ there is underestimated (no method samples it well)",
     "ring-caustic": "the largest bin |z| lies in the bottom rows (the floor nearest the camera), where lt's and "
                     "bdpt's t = 1 splats are largest and rare: single pixels there are heavy-tailed in both "
                     "(ptnee, which has no splats, is smooth there), so their σ from 8 renders is too small",
