@@ -4,7 +4,9 @@
 //  * The test render's variance is not estimated from its own few samples (a variance from a
 //    handful of samples makes z heavy-tailed). It comes from the reference's standard-error image,
 //    which was measured across K independent renders of the *same integrator*: the per-sample
-//    variance is σ² = se_ref² · N_ref, so the test's mean of N_test samples has σ² / N_test.
+//    variance is σ² = se_ref² · N_ref, so the test's mean of N_test samples has σ² / N_test. Where
+//    the reference combines other methods (refs/README.md), that integrator's own standard-error
+//    image (judgedSeRgba) plays this part and refSeRgba is the reference's own noise.
 //  * Pixels are averaged in b×b bins first: each bin mean sums b² independent pixel means, so it is
 //    much closer to normal than a pixel of a few samples, and its variance estimate has b² times the
 //    degrees of freedom of one pixel's.
@@ -40,7 +42,11 @@ struct ZTestInput {
     const float* testRgba = nullptr;    ///< the render under test (packed RGBA)
     const float* refRgba = nullptr;     ///< the reference (mean of the reference renders)
     const float* refSeRgba = nullptr;   ///< standard error of the reference's mean
-    double refSamples = 0;              ///< samples per pixel behind the reference (all renders)
+    /// Standard error of the mean of refSamples samples per pixel of the integrator under test (its
+    /// own renders, measured across K of them): the model of the test render's noise. Null: the
+    /// reference itself is that integrator's mean (refSeRgba serves both).
+    const float* judgedSeRgba = nullptr;
+    double refSamples = 0;              ///< samples per pixel behind judgedSeRgba (all renders)
     double testSamples = 0;             ///< samples per pixel of the render under test
     int bin = 8;                        ///< bin side in pixels
     double alpha = 0.01;                ///< family-wise level of each of the two statistics
@@ -94,13 +100,14 @@ inline ZTestResult referenceZTest(const ZTestInput& in) {
                     for (int x = bx; x < bx + b; ++x) {
                         size_t i = (size_t(y) * size_t(in.width) + size_t(x)) * 4 + size_t(c);
                         double se = in.refSeRgba[i];
+                        double seJudged = in.judgedSeRgba ? in.judgedSeRgba[i] : se;
                         double refValue = in.refRgba[i];
                         t += in.testRgba[i];
                         ref += refValue;
                         // The test's variance + the reference's own + the reference's rounding to
                         // half float (uniform within ±2⁻¹¹ relative: variance (2⁻¹¹ |r|)² / 3).
                         double rounding = std::ldexp(std::abs(refValue), -11);
-                        var += se * se * (ratio + 1.0) + rounding * rounding / 3.0;
+                        var += seJudged * seJudged * ratio + se * se + rounding * rounding / 3.0;
                     }
                 double n = double(b) * b;
                 t /= n;

@@ -24,12 +24,13 @@ def read_exr(path):
     return pixels[:, :, :3], meta
 
 
-def write_exr(path, rgb, meta=None):
+def write_exr(path, rgb, meta=None, half=False):
     """Float32 RGB EXR (ZIP) with string metadata, written to a temporary file and renamed into place.
-    Not half: dark pixels and standard errors fall below half's smallest normal (6.1e-5), and a reader
-    running with denormals-are-zero (as renderer threads do) reads such half subnormals as 0."""
+    half=True stores half floats: only for images with no value in half's subnormal range (below
+    6.1e-5), which a reader running with denormals-are-zero (as renderer threads do) reads as 0
+    (tools/make_refs_stats.py's storage_type decides)."""
     h, w, _ = rgb.shape
-    spec = oiio.ImageSpec(w, h, 3, oiio.FLOAT)
+    spec = oiio.ImageSpec(w, h, 3, oiio.HALF if half else oiio.FLOAT)
     spec.channelnames = ("R", "G", "B")
     spec.attribute("compression", "zip")
     for k, v in (meta or {}).items():

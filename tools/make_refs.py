@@ -1,43 +1,48 @@
 #!/usr/bin/env python3
-"""Render Tessera's reference images into refs/, with provenance.
+"""Reference images in refs/ from methods the judged renders do not share, with their agreement.
 
-Usage:
-    python3 tools/make_refs.py                      # every scene in REFS (slow: tens of minutes)
-    python3 tools/make_refs.py cornell-box furnace  # only these
-    python3 tools/make_refs.py --scale 0.25 NAME    # quick trial: a quarter of the samples, into --out
-    python3 tools/make_refs.py --readme             # only rebuild refs/README.md from refs/refs.json
-    python3 tools/make_refs.py --rehash NAME ...    # restamp the scene hash of existing references
+Usage (niced to 19 itself; resumable: a scene already made with the same settings is skipped, and the
+renders of an unfinished scene are kept in out/refs-cache and reused):
+    python3 tools/make_refs.py                         # every scene of SCENES, in order
+    python3 tools/make_refs.py cornell-box furnace     # only these
+    python3 tools/make_refs.py --budget 600 NAME       # stop starting renders after 600 s per scene
+                                                       # (at least MIN_RENDERS per method; run again to go on)
+    python3 tools/make_refs.py --force NAME            # remake from the cached renders (new statistics)
+    python3 tools/make_refs.py --scale 0.25 --out DIR  # quick trial: a quarter of the samples, into DIR
+    python3 tools/make_refs.py --readme                # only rebuild refs/README.md from refs/refs.json
+    python3 tools/make_refs.py --rehash NAME ...       # restamp the scene hash of existing references
 
---rehash is for a scene-file change that provably leaves every image bit-identical (for example an
-extension stating what the renderer already assumed): render the scene with the old and the new file
-first and check `tessera compare` reports a max error of 0. It rewrites tessera:scene_hash in
-refs/NAME.exr and NAME-stderr.exr (pixels unchanged) and in refs/refs.json, and renders nothing.
+--rehash is for a scene-file change that provably leaves every image bit-identical: render the scene
+with the old and the new file first and check `tessera compare` reports a max error of 0.
 
-For each scene: K renders with independent seeds (1000, 1001, ...) of the scene's most robust
-integrator; the reference is their per-pixel mean and the standard-error image is the standard error
-of that mean across the K renders (sample standard deviation / sqrt(K)). This works for every
-integrator, splatting ones (lt, bdpt) included, whose film keeps no per-pixel variance. Where a
-second unbiased integrator can sample every path of the scene, it is rendered the same way (seeds
-2000, ...) and the agreement recorded: the fraction of pixel channels within 2 and 3 combined standard
-errors, the largest |z| and the relMSE between the two images.
-
-Outputs (float32 RGB EXR, ZIP, about 100 kB each at these resolutions):
-    refs/NAME.exr           reference (mean of the K renders)
-    refs/NAME-stderr.exr    per-pixel standard error of that mean
-    refs/thumbs/NAME.png    128-pixel-wide sRGB thumbnail
-    refs/refs.json          provenance and agreement of every reference (machine-readable)
-    refs/README.md          the same as a table
-Every EXR carries its provenance as string attributes: tessera:command (the exact render command,
-with SEED standing for each seed), tessera:integrator, tessera:spp (per render), tessera:seeds,
-tessera:spp_total, tessera:render_seconds (sum over the K renders), tessera:git, plus the renderer's
-own tessera:* attributes of the first render (scene hash, version, accel, max depth).
-
-Tests and the convergence study must not use seeds 1000-2999 for their own renders.
-Needs python3-numpy and python3-openimageio: `bash tools/bootstrap.sh --install study` installs them
-when missing (this script calls it itself). tools/study --make-refs makes quick development
-references with the same estimator (mean_of_renders below).
+Per scene (SCENES): two or three *different* methods each render K independent images (same spp,
+seeds METHOD_SEED0[j] + i) at the reference resolution (>= 256 pixels wide): Tessera's integrators
+(ptnee, lt, bdpt: different estimators with different failure modes) and, for scenes of diffuse and
+emissive triangles only, Blender's Cycles (tools/cycles_render.py), an independent renderer. A
+method's mean has the standard error std/sqrt(K) across its renders. Then:
+  * reference = the analytic value where the scene has one (furnace), else the inverse-variance
+    combination of the methods (tools/make_refs_stats.combine), each weighted only where it samples
+    every path (lt misses what the camera sees directly in a mirror or through glass: the
+    "direct-delta" mask, rendered from a copy of the scene whose delta surfaces glow);
+  * agreement of the judged integrator (the first method, which tests/test_scenes.cpp renders) with
+    every other method, and with the analytic value (make_refs_stats.agreement);
+  * the judged integrator's own standard error at the test's resolution (the Z-test's model of a
+    test render's noise), and the noise margin: a test render's expected squared error over the
+    reference's (issue 18 asks >= 16).
+Outputs (half-float RGB EXR, ZIP, where half holds the values: see make_refs_stats.storage_type):
+    refs/NAME.exr                 the reference
+    refs/NAME-stderr.exr          its standard error
+    refs/NAME-JUDGED-stderr.exr   the judged integrator's standard error at the test resolution
+    refs/NAME-mask.exr            where a scene has a mask: 1 where every method samples well
+                                  (tools/study judges the scene there only)
+    refs/thumbs/NAME.png, refs/refs.json (provenance, agreement), refs/README.md (the table)
+Every EXR carries its provenance as tessera:* attributes (commands, methods, seeds, git revision,
+scene hash). Tests and the convergence study must not use seeds 1000-2999 for their own renders.
+Needs python3-numpy and python3-openimageio (installed by this script through tools/bootstrap.sh
+--install study) and, for Cycles, `bash tools/bootstrap.sh --install cycles`.
 """
 
+import hashlib
 import json
 import os
 import shutil
@@ -52,251 +57,111 @@ import study_deps  # noqa: E402
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 REFS = os.path.join(ROOT, "refs")
+CACHE = os.path.join(ROOT, "out", "refs-cache")
 TESSERA = os.path.join(ROOT, "build", "src", "tessera")
+K, MIN_RENDERS = 8, 4
+METHOD_SEED0 = (1000, 1400, 1800, 2200)  # method j's seeds: METHOD_SEED0[j] + i, i < K
+TEST_SPP = 4  # samples per pixel of tests/test_scenes.cpp's Z-test render (at the test resolution)
 
-# name: scene, resolution, reference integrator, spp per render, renders K, and the
-# agreement integrator (None when no second method samples every path) with its spp per render.
-# Why each integrator: see WHY below and refs/README.md.
-REF_SEED0, AGREE_SEED0, K = 1000, 2000, 8
+
+def S(scene, res, methods, why, test_res=None, analytic=None, mask=None, independent=None):
+    """A scene's reference recipe. methods: [(method, spp per render)], the first the judged one
+    (the integrator the test renders with); test_res: the test's resolution (the reference's / 2 by
+    default); analytic: the exact RGB of every pixel; mask: 'direct-delta' where lt is one of the
+    methods and the camera sees mirrors or glass; independent: why the methods are independent."""
+    w, h = (int(v) for v in res.split("x"))
+    return {"scene": scene, "resolution": res, "methods": [list(m) for m in methods],
+            "test_resolution": test_res or "%dx%d" % (w // 2, h // 2), "analytic": analytic, "mask": mask,
+            "why": why, "independent": independent or ""}
+
+
+# Cheapest and most important first: the order `make_refs.py` with no names renders them in.
 SCENES = {
-    "cornell-box": ("scenes/cornell-box/cornell-box.gltf", "96x96", "bdpt", 64, "ptnee", 128),
-    "cornell-box-specular": ("scenes/cornell-box-specular/cornell-box-specular.gltf", "96x96",
-                             "bdpt", 64, "ptnee", 128),
-    "sphere-cornell": ("scenes/sphere-cornell/sphere-cornell.gltf", "128x96", "bdpt", 48, "ptnee", 96),
-    "sphere-cornell-mirror": ("scenes/sphere-cornell/sphere-cornell-mirror.gltf", "128x96",
-                              "bdpt", 48, "ptnee", 96),
-    "sphere-cornell-glass": ("scenes/sphere-cornell/sphere-cornell-glass.gltf", "128x96",
-                             "bdpt", 48, "ptnee", 96),
-    "ring-caustic": ("scenes/ring-caustic/ring-caustic.gltf", "128x96", "bdpt", 128, None, 0),
-    "dragon": ("scenes/dragon/dragon.gltf", "120x90", "bdpt", 32, "ptnee", 64),
-    "glass-dragon": ("scenes/dragon/glass-dragon.gltf", "120x90", "bdpt", 32, None, 0),
-    "veach-mis": ("scenes/veach-mis/veach-mis.gltf", "144x96", "bdpt", 64, "ptnee", 128),
-    "tiny-light-10": ("scenes/tiny-light/tiny-light-10.gltf", "96x96", "bdpt", 64, "ptnee", 128),
-    "tiny-light-100": ("scenes/tiny-light/tiny-light-100.gltf", "96x96", "bdpt", 64, "ptnee", 128),
-    "door-ajar": ("scenes/door-ajar/door-ajar.gltf", "128x96", "bdpt", 32, "ptnee", 64),
-    "sds-caustic": ("scenes/sds-caustic/sds-caustic.gltf", "128x96", "bdpt", 96, "ptnee", 192),
-    "point-light-specular": ("scenes/point-light-specular/point-light-specular.gltf", "128x96",
-                             "bdpt", 128, None, 0),
-    "furnace": ("scenes/furnace/furnace.gltf", "64x64", "bdpt", 32, "ptnee", 64),
-    "webxr-controllers": ("scenes/webxr/webxr-controllers.gltf", "128x96", "bdpt", 32, "ptnee", 64),
-    "webxr-lineup": ("scenes/webxr/webxr-lineup.gltf", "160x90", "bdpt", 32, "ptnee", 64),
-    "webxr-hdri": ("scenes/webxr/webxr-hdri.gltf", "128x96", "bdpt", 32, "ptnee", 64),
-    "spot-light": ("scenes/spot-light/spot-light.gltf", "128x96", "bdpt", 256, "ptnee", 512),
-    "hdri-spheres": ("scenes/hdri-spheres/hdri-spheres.gltf", "128x96", "bdpt", 256, "ptnee", 512),
-    "hdri-sun": ("scenes/hdri-spheres/hdri-sun.gltf", "128x96", "bdpt", 256, "ptnee", 512),
+    "furnace": S("scenes/furnace/furnace.gltf", "256x256", [("bdpt", 8), ("ptnee", 16)],
+                 "analytic: every pixel Le / (1 - a) = (2, 1.4286, 3.3333)",
+                 analytic=[1.0 / 0.5, 1.0 / 0.7, 1.0 / 0.3]),
+    "cornell-box": S("scenes/cornell-box/cornell-box.gltf", "256x256", [("bdpt", 16), ("ptnee", 64), ("cycles", 32)],
+                     "diffuse only: every method samples every path",
+                     independent="Cycles is another renderer; ptnee and bdpt share only Tessera's scene code"),
+    "tiny-light-10": S("scenes/tiny-light/tiny-light-10.gltf", "256x256", [("bdpt", 16), ("ptnee", 64), ("cycles", 32)],
+                       "light sampling (ptnee, bdpt, Cycles) is unaffected by the light's size at constant power",
+                       independent="Cycles is another renderer"),
+    "tiny-light-100": S("scenes/tiny-light/tiny-light-100.gltf", "256x256", [("bdpt", 16), ("ptnee", 64), ("cycles", 32)],
+                        "light sampling (ptnee, bdpt, Cycles) is unaffected by the light's size at constant power",
+                        independent="Cycles is another renderer"),
+    "ring-caustic": S("scenes/ring-caustic/ring-caustic.gltf", "256x192", [("bdpt", 64), ("lt", 128)],
+                      "the cardioid caustic is light -> mirror -> plane: lt samples it directly, bdpt through "
+                      "t=1 with MIS; lt cannot see the ring itself (direct-delta mask: there bdpt alone)",
+                      mask="direct-delta",
+                      independent="lt is a different estimator (light paths splatted to the camera); bdpt's "
+                                  "s=0 and s=1 strategies are absent from it"),
+    "sds-caustic": S("scenes/sds-caustic/sds-caustic.gltf", "256x192", [("bdpt", 48), ("ptnee", 96)],
+                     "the caustic seen in the mirror is an SDS path: only s=0 (hitting the light by BSDF sampling "
+                     "through the glass) samples it, in bdpt as in ptnee; lt cannot. The camera sees 93% of the "
+                     "image in the mirror, so no part is left to judge on alone: no method samples it well",
+                     independent="ptnee is a different estimator (no light sub-paths, no MIS over s)"),
+    "veach-mis": S("scenes/veach-mis/veach-mis.gltf", "288x192", [("bdpt", 32), ("ptnee", 64)],
+                   "MIS between BSDF and light sampling is the point of the scene: bdpt and ptnee combine them",
+                   independent="ptnee is a different estimator"),
+    "cornell-box-specular": S("scenes/cornell-box-specular/cornell-box-specular.gltf", "256x256",
+                              [("bdpt", 32), ("ptnee", 128)],
+                              "caustics under an area light: bdpt reaches them through t=1; ptnee by BSDF-sampling "
+                              "the light through glass (unbiased, fireflies)",
+                              independent="ptnee is a different estimator"),
+    "sphere-cornell": S("scenes/sphere-cornell/sphere-cornell.gltf", "256x192", [("bdpt", 24), ("ptnee", 48)],
+                        "the light is a radius-600 sphere whose visible cap is tiny: bdpt's light sub-paths start on it",
+                        independent="ptnee is a different estimator"),
+    "sphere-cornell-mirror": S("scenes/sphere-cornell/sphere-cornell-mirror.gltf", "256x192",
+                               [("bdpt", 24), ("ptnee", 48)], "as sphere-cornell, plus the mirror's caustic (bdpt t=1)",
+                               independent="ptnee is a different estimator"),
+    "sphere-cornell-glass": S("scenes/sphere-cornell/sphere-cornell-glass.gltf", "256x192",
+                              [("bdpt", 24), ("ptnee", 48)], "as sphere-cornell, plus the glass sphere's caustic (bdpt t=1)",
+                              independent="ptnee is a different estimator"),
+    "door-ajar": S("scenes/door-ajar/door-ajar.gltf", "256x192", [("bdpt", 16), ("ptnee", 32)],
+                   "all light comes through the gap: bdpt's light sub-paths start in the lit room",
+                   independent="ptnee is a different estimator"),
+    "dragon": S("scenes/dragon/dragon.gltf", "256x192", [("bdpt", 16), ("ptnee", 32)],
+                "diffuse: bdpt and ptnee both sample everything", independent="ptnee is a different estimator"),
+    "glass-dragon": S("scenes/dragon/glass-dragon.gltf", "256x192", [("bdpt", 16), ("ptnee", 32)],
+                      "caustics through glass under an area light (bdpt t=1); SDS paths come only from s=0 in any method",
+                      independent="ptnee is a different estimator"),
+    "point-light-specular": S("scenes/point-light-specular/point-light-specular.gltf", "256x192",
+                              [("bdpt", 64), ("lt", 128)],
+                              "point light: ptnee misses the caustics, lt what the mirror shows; bdpt samples all but "
+                              "point light -> specular -> diffuse -> specular -> camera (no method can); compared with lt "
+                              "outside the direct-delta mask", mask="direct-delta",
+                              independent="lt is a different estimator"),
+    "webxr-controllers": S("scenes/webxr/webxr-controllers.gltf", "256x192", [("bdpt", 16), ("ptnee", 32)],
+                           "third-party glTF assets under an area light: bdpt and ptnee both sample every path",
+                           independent="ptnee is a different estimator"),
+    "webxr-lineup": S("scenes/webxr/webxr-lineup.gltf", "320x180", [("bdpt", 16), ("ptnee", 32)],
+                      "third-party glTF assets, two of them emissive, one with a transmissive part",
+                      test_res="160x90", independent="ptnee is a different estimator"),
+    "webxr-hdri": S("scenes/webxr/webxr-hdri.gltf", "256x192", [("bdpt", 16), ("ptnee", 32)],
+                    "third-party glTF assets lit only by an HDRI: ptnee and bdpt importance-sample the environment",
+                    independent="ptnee is a different estimator"),
+    "spot-light": S("scenes/spot-light/spot-light.gltf", "256x192", [("bdpt", 128), ("ptnee", 256)],
+                    "spot and directional lights only (deltas): ptnee reaches every path through the glossy sphere by "
+                    "BSDF sampling, bdpt also by light tracing", independent="ptnee is a different estimator"),
+    "hdri-spheres": S("scenes/hdri-spheres/hdri-spheres.gltf", "256x192", [("bdpt", 128), ("ptnee", 256)],
+                      "environment only (a small sun holds 2/3 of the light); the glass sphere's caustic comes from "
+                      "bdpt's light sub-paths (t=1)", independent="ptnee is a different estimator"),
+    "hdri-sun": S("scenes/hdri-spheres/hdri-sun.gltf", "256x192", [("bdpt", 128), ("ptnee", 256)],
+                  "environment only, no delta surfaces: every integrator samples every path",
+                  independent="ptnee is a different estimator"),
 }
 
-WHY = {
-    "cornell-box": "diffuse only: every integrator samples every path; bdpt has the lowest variance per sample",
-    "cornell-box-specular": "caustics under an area light: bdpt reaches them through t=1 (light tracing); "
-                            "ptnee only by BSDF-sampling the light through glass (unbiased, fireflies)",
-    "sphere-cornell": "the light is a radius-600 sphere whose visible cap is tiny: bdpt's light sub-paths start on it",
-    "sphere-cornell-mirror": "as sphere-cornell, plus the mirror's caustic (bdpt t=1)",
-    "sphere-cornell-glass": "as sphere-cornell, plus the glass sphere's caustic (bdpt t=1)",
-    "ring-caustic": "the cardioid caustic is light -> mirror -> plane: bdpt gets it from t=1; ptnee only by "
-                    "BSDF-sampling a tiny light through the mirror (its agreement would take hours)",
-    "dragon": "diffuse: bdpt and ptnee both sample everything",
-    "glass-dragon": "caustics through glass under an area light (bdpt t=1); SDS paths (caustics seen through "
-                    "the glass) come only from s=0 in any method",
-    "veach-mis": "MIS between BSDF and light sampling is the point of the scene: bdpt and ptnee both combine them",
-    "tiny-light-10": "light sampling (ptnee, bdpt) is unaffected by the light's size at constant power",
-    "tiny-light-100": "light sampling (ptnee, bdpt) is unaffected by the light's size at constant power",
-    "door-ajar": "all light comes through the gap: bdpt's light sub-paths start in the lit room",
-    "sds-caustic": "the caustic seen in the mirror is an SDS path: only s=0 (hitting the light by BSDF sampling "
-                   "through the glass) samples it, in bdpt as in ptnee; lt cannot",
-    "point-light-specular": "point light: ptnee misses the caustics, lt what the mirror shows; bdpt samples "
-                            "all but point light -> specular -> diffuse -> specular -> camera (no method can)",
-    "furnace": "analytic: every pixel Le / (1 - a) = (2, 1.4286, 3.3333)",
-    "webxr-controllers": "third-party glTF assets (TESSERA_asset_gltf) under an area light: bdpt and ptnee both "
-                         "sample every path",
-    "webxr-lineup": "third-party glTF assets, two of them emissive, one with a transmissive part: bdpt and ptnee "
-                    "both sample every path (the transmissive part's caustics only through BSDF sampling in ptnee)",
-    "webxr-hdri": "third-party glTF assets lit only by an HDRI (plus the emissive LED texture): ptnee and bdpt "
-                  "importance-sample the environment; bdpt's light sub-paths also start at it",
-    "spot-light": "spot and directional lights only (deltas): pt sees black; ptnee reaches every path through "
-                  "the glossy sphere by BSDF sampling, bdpt also by light tracing",
-    "hdri-spheres": "environment only (a small sun holds 2/3 of the light): ptnee and bdpt sample it by "
-                    "luminance; the glass sphere's caustic comes from bdpt's light sub-paths (t=1)",
-    "hdri-sun": "environment only, no delta surfaces: every integrator samples every path (lt sees the sky "
-                "directly through camera rays); ptnee and bdpt importance-sample the sun, pt must hit it",
-}
+RUN_BINARY = TESSERA  # replaced by a private copy in main(): a rebuild during the run cannot swap it
+
+
+def log(msg):
+    print(msg, file=sys.stderr, flush=True)
 
 
 def git_revision():
     rev = subprocess.check_output(["git", "rev-parse", "HEAD"], cwd=ROOT, text=True).strip()
     dirty = subprocess.call(["git", "diff", "--quiet", "HEAD", "--", "src", "scenes"], cwd=ROOT)
     return rev + ("-dirty" if dirty else "")
-
-
-RUN_BINARY = TESSERA  # replaced by a private copy in main(): a rebuild during the run cannot swap it
-
-
-def render(scene, res, integrator, spp, seed, out, threads):
-    cmd = [os.path.relpath(TESSERA, ROOT), "render", scene, "--integrator", integrator, "--spp", str(spp),
-           "--seed", str(seed), "--resolution", res, "--max-depth", "-1", "--no-png", "--quiet", "--json",
-           "-o", out]
-    if threads:
-        cmd += ["--threads", str(threads)]
-    result = subprocess.run([RUN_BINARY] + cmd[1:], cwd=ROOT, check=True, capture_output=True, text=True)
-    return json.loads(result.stdout.strip().splitlines()[-1]), cmd
-
-
-def mean_of_renders(render_seed, seeds):
-    """The reference estimator: render_seed(seed) renders one independent image and returns its EXR
-    path; the reference is the per-pixel mean over `seeds`, its noise the standard error of that mean
-    across the renders (sample standard deviation / sqrt(K)), valid for splatting integrators too.
-    Returns (mean, stderr), float64 [H, W, 3]."""
-    import numpy as np
-    import exr_io
-    stack = np.stack([exr_io.read_exr(render_seed(seed))[0] for seed in seeds])
-    return stack.mean(axis=0), stack.std(axis=0, ddof=1) / np.sqrt(len(seeds))
-
-
-def run_set(name, scene, res, integrator, spp, seed0, tmpdir, threads):
-    """K renders; returns (mean, stderr, seconds, command template, first render's attributes)."""
-    import exr_io
-    state = {"seconds": 0.0, "attrs0": None, "template": None}
-
-    def render_seed(seed):
-        out = os.path.join(tmpdir, "%s-%s-%d.exr" % (name, integrator, seed))
-        t0 = time.time()
-        info, cmd = render(scene, res, integrator, spp, seed, out, threads)
-        state["seconds"] += info["seconds"]
-        if info["nonfinite_dropped"]:
-            print("  warning: %d non-finite samples dropped" % info["nonfinite_dropped"], file=sys.stderr)
-        if state["attrs0"] is None:
-            state["attrs0"] = exr_io.read_exr(out)[1]
-            state["template"] = " ".join("SEED" if c == str(seed) else c for c in cmd).replace(out, "OUT.exr")
-        print("  %s %s seed %d: %.1f s (wall %.1f s)" % (name, integrator, seed, info["seconds"],
-                                                       time.time() - t0), file=sys.stderr, flush=True)
-        return out
-
-    mean, stderr = mean_of_renders(render_seed, range(seed0, seed0 + K))
-    return mean, stderr, state["seconds"], state["template"], state["attrs0"]
-
-
-def agreement(a, sa, b, sb):
-    import numpy as np
-    se = np.sqrt(sa ** 2 + sb ** 2)
-    diff = np.abs(a - b)
-    ok = se > 0
-    z = np.where(ok, diff / np.where(ok, se, 1.0), np.where(diff > 1e-6, np.inf, 0.0))
-    return {
-        "within_2se": float(np.mean(z < 2.0)),
-        "within_3se": float(np.mean(z < 3.0)),
-        "max_abs_z": float(np.max(z)),
-        "relmse": float(np.mean((a - b) ** 2 / (a ** 2 + 0.01))),
-        "mean_ratio": [float(x) for x in (b.mean(axis=(0, 1)) / np.maximum(a.mean(axis=(0, 1)), 1e-30))],
-    }
-
-
-def make_one(name, out_dir, threads, scale):
-    import numpy as np
-    import exr_io
-    scene, res, integ, spp, agree, agree_spp = SCENES[name]
-    spp = max(1, int(round(spp * scale)))
-    agree_spp = max(1, int(round(agree_spp * scale)))
-    rev = git_revision()
-    tmpdir = tempfile.mkdtemp(prefix="tessera-refs-")
-    try:
-        mean, stderr, seconds, template, attrs0 = run_set(name, scene, res, integ, spp, REF_SEED0, tmpdir, threads)
-        entry = {
-            "scene": scene, "resolution": res, "integrator": integ, "spp": spp, "renders": K,
-            "seeds": "%d-%d" % (REF_SEED0, REF_SEED0 + K - 1), "spp_total": spp * K,
-            "render_seconds": round(seconds, 1), "git": rev, "command": template,
-            "mean_rgb": [round(float(x), 6) for x in mean.mean(axis=(0, 1))],
-            "median_relative_stderr": float(np.median(stderr / np.maximum(mean, 1e-3))),
-            "why": WHY[name],
-            "scene_hash": attrs0.get("tessera:scene_hash", ""),
-            "max_depth": attrs0.get("tessera:max_depth", ""),
-            "accel": attrs0.get("tessera:accel", ""),
-            "version": attrs0.get("tessera:version", ""),
-        }
-        if agree:
-            amean, astderr, aseconds, atemplate, _ = run_set(name, scene, res, agree, agree_spp, AGREE_SEED0,
-                                                            tmpdir, threads)
-            entry["agreement"] = dict(agreement(mean, stderr, amean, astderr), integrator=agree,
-                                      spp=agree_spp, renders=K,
-                                      seeds="%d-%d" % (AGREE_SEED0, AGREE_SEED0 + K - 1),
-                                      render_seconds=round(aseconds, 1), command=atemplate)
-    finally:
-        shutil.rmtree(tmpdir, ignore_errors=True)
-    attrs = {
-        "tessera:command": entry["command"], "tessera:integrator": integ, "tessera:spp": spp,
-        "tessera:renders": K, "tessera:seeds": entry["seeds"], "tessera:spp_total": spp * K,
-        "tessera:render_seconds": entry["render_seconds"], "tessera:git": rev, "tessera:scene": scene,
-        "tessera:resolution": res, "tessera:scene_hash": entry["scene_hash"],
-        "tessera:max_depth": entry["max_depth"], "tessera:accel": entry["accel"],
-        "tessera:version": entry["version"], "tessera:made_by": "tools/make_refs.py",
-    }
-    if "agreement" in entry:
-        attrs["tessera:agreement"] = json.dumps(entry["agreement"])
-    os.makedirs(out_dir, exist_ok=True)
-    exr_io.write_exr(os.path.join(out_dir, name + ".exr"), mean, dict(attrs, **{"tessera:kind": "mean of the renders"}))
-    exr_io.write_exr(os.path.join(out_dir, name + "-stderr.exr"), stderr,
-              dict(attrs, **{"tessera:kind": "standard error of the mean across the renders"}))
-    exr_io.write_thumbnail(os.path.join(out_dir, "thumbs", name + ".png"), mean)
-    return entry
-
-
-def fmt_agreement(e):
-    a = e.get("agreement")
-    if not a:
-        return "— (no second method samples every path)"
-    return ("%s %d×%d spp: %.1f%% within 3σ, largest z %.1f, relMSE %.2g, mean ratio %s" %
-            (a["integrator"], a["renders"], a["spp"], 100 * a["within_3se"], a["max_abs_z"], a["relmse"],
-             "/".join("%.3f" % r for r in a["mean_ratio"])))
-
-
-def write_readme(db):
-    lines = [
-        "# Reference images",
-        "",
-        "Made by `tools/make_refs.py` (see its docstring); provenance is in each EXR's `tessera:*`",
-        "attributes and in `refs.json`. Each reference `NAME.exr` is the per-pixel mean of K = %d" % K,
-        "renders with seeds 1000…1007 of the integrator named; `NAME-stderr.exr` is the standard error",
-        "of that mean across the renders (so it is valid for splatting integrators too). The test",
-        "`Shipped/ShippedSceneTest.MatchesItsReference/*` (tests/test_scenes.cpp) renders each scene again with other seeds and",
-        "Z-tests it against these two images. Float32 RGB EXR (not half: dark pixels and standard errors",
-        "fall below half's smallest normal, which a reader with denormals-are-zero set, as in any thread",
-        "that has rendered, reads as 0); `tessera compare` reads them.",
-        "",
-        "Regenerate (slow; niced, 2 threads): `python3 tools/make_refs.py [NAME...]`, after",
-        "`tools/fetch_assets.sh` for the dragons and the WebXR controllers.",
-        "",
-        "Agreement: a second, independent integrator rendered the same way (seeds 2000…2007) where it",
-        "can sample every path; z = |a − b| / sqrt(σa² + σb²) per pixel channel; mean ratio = its image",
-        "mean / the reference's. With K = 8 renders each σ has 7 degrees of freedom, so about 1% of",
-        "channels exceed 3σ even when both agree; heavy-tailed estimators (ptnee's BSDF-sampled caustics)",
-        "underestimate their own σ and show more. The dragon scenes read the Stanford dragon and the",
-        "webxr scenes the WebXR input-profile GLBs (MIT) that `tools/fetch_assets.sh` fetches (SHA-256",
-        "checked), found through `TESSERA_ASSETS` or the fetch cache; the webxr references show the",
-        "renderer's materials of their date (textures and the full glTF material model make them stale:",
-        "regenerate them when those land).",
-        "",
-        "| reference | integrator, renders × spp | resolution | render s | mean RGB | median rel. stderr | agreement | why this integrator |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for name in SCENES:
-        e = db.get(name)
-        if not e:
-            lines.append("| `%s` | *not rendered* | | | | | | %s |" % (name, WHY[name]))
-            continue
-        lines.append("| ![](thumbs/%s.png) `%s` | %s, %d × %d | %s | %.0f | %s | %.3f | %s | %s |" % (
-            name, name, e["integrator"], e["renders"], e["spp"], e["resolution"], e["render_seconds"],
-            ", ".join("%.4g" % x for x in e["mean_rgb"]), e["median_relative_stderr"], fmt_agreement(e),
-            e["why"]))
-    lines += ["", "Exact commands (`SEED` = each seed of the set; git revision of the renderer):", ""]
-    for name in SCENES:
-        e = db.get(name)
-        if not e:
-            continue
-        lines.append("- `%s` (git %s, %s): `%s`" % (name, e["git"][:12], e["seeds"], e["command"]))
-        if e.get("agreement"):
-            lines.append("  - agreement (%s): `%s`" % (e["agreement"]["seeds"], e["agreement"]["command"]))
-    lines.append("")
-    with open(os.path.join(REFS, "README.md"), "w") as f:
-        f.write("\n".join(lines))
 
 
 def fnv1a64_of_file(path):
@@ -308,38 +173,242 @@ def fnv1a64_of_file(path):
     return "fnv1a64:%016x" % h
 
 
-def rehash(names):
-    study_deps.ensure_packages(("numpy", "OpenImageIO"))
+def render_command(method, scene, res, spp, seed, out, threads):
+    """The command line of one render (argv, relative paths) and how to run it."""
+    if method == "cycles":
+        return ["blender", "-b", "--factory-startup", "-noaudio", "-P", "tools/cycles_render.py", "--", scene, out,
+                "--spp", str(spp), "--seed", str(seed), "--resolution", res, "--threads", str(threads)]
+    return [os.path.relpath(TESSERA, ROOT), "render", scene, "--integrator", method, "--sampler", "independent",
+            "--spp", str(spp), "--seed", str(seed), "--resolution", res, "--max-depth", "-1", "--no-png", "--quiet",
+            "--json", "--threads", str(threads), "-o", out]
+
+
+def run_render(method, scene, res, spp, seed, out, threads):
+    """Renders one image to `out` (atomically); returns (seconds, command template)."""
+    cmd = render_command(method, scene, res, spp, seed, out + ".tmp.exr", threads)
+    argv = ["nice", "-n", "19"] + ([RUN_BINARY] + cmd[1:] if method != "cycles" else cmd)
+    env = dict(os.environ)
+    if method == "cycles":
+        # Blender's Python finds its modules (numpy) through the system interpreter: keep a pyenv or
+        # virtualenv python3 earlier on PATH from standing in for it.
+        env["PATH"] = os.pathsep.join(p for p in env.get("PATH", "").split(os.pathsep)
+                                      if ".pyenv" not in p and "virtualenv" not in p and p != os.environ.get("VIRTUAL_ENV"))
+    r = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, env=env)
+    if r.returncode != 0:
+        raise RuntimeError("render failed (%s):\n%s%s" % (" ".join(cmd), r.stdout[-2000:], r.stderr[-2000:]))
+    if method == "cycles":
+        lines = [l for l in r.stdout.splitlines() if l.startswith("cycles-json ")]
+        if not lines or not os.path.exists(out + ".tmp.exr"):
+            raise RuntimeError("Cycles failed (%s):\n%s%s" % (" ".join(cmd), r.stdout[-3000:], r.stderr[-2000:]))
+        seconds = json.loads(lines[-1][len("cycles-json "):])["seconds"]
+    else:
+        info = json.loads(r.stdout.strip().splitlines()[-1])
+        seconds = info["seconds"]
+        if info["nonfinite_dropped"]:
+            log("  warning: %d non-finite samples dropped" % info["nonfinite_dropped"])
+    os.replace(out + ".tmp.exr", out)
+    template = " ".join("SEED" if c == str(seed) else c for c in cmd).replace(out + ".tmp.exr", "OUT.exr")
+    return seconds, template
+
+
+def settings_key(name, spec, scale):
+    """What makes a reference besides the scene's bytes: recipe and sample scale."""
+    blob = json.dumps({"spec": {k: v for k, v in spec.items() if k not in ("why", "independent")}, "scale": scale,
+                       "K": K, "seeds": METHOD_SEED0}, sort_keys=True)
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+def direct_delta_scene(scene):
+    """A copy of the scene whose mirror and glass (delta) surfaces glow white (1) and everything else
+    is black without lights: its render is each pixel's coverage by delta surfaces the camera sees
+    directly, where light tracing (lt) cannot reach the camera."""
+    with open(os.path.join(ROOT, scene)) as f:
+        g = json.load(f)
+    for m in g.get("materials", []):
+        pbr = m.setdefault("pbrMetallicRoughness", {})
+        ext = m.get("extensions", {})
+        rough = pbr.get("roughnessFactor", 1.0)
+        delta = rough == 0.0 and (pbr.get("metallicFactor", 1.0) == 1.0 or
+                                  ext.get("KHR_materials_transmission", {}).get("transmissionFactor", 0.0) > 0)
+        pbr.update({"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0.0, "roughnessFactor": 1.0})
+        m["extensions"] = {"KHR_materials_specular": {"specularFactor": 0.0}}
+        m["emissiveFactor"] = [1.0, 1.0, 1.0] if delta else [0.0, 0.0, 0.0]
+        m.pop("doubleSided", None)
+        m["doubleSided"] = True
+    for n in g.get("nodes", []):
+        n.get("extensions", {}).pop("KHR_lights_punctual", None)
+    g.get("extensions", {}).pop("TESSERA_environment", None)
+    # Beside the scene (hidden, removed after the render), so that its buffers resolve as they do for
+    # the scene itself.
+    out = os.path.join(os.path.dirname(os.path.join(ROOT, scene)), ".direct-delta-%d.gltf" % os.getpid())
+    with open(out, "w") as f:
+        json.dump(g, f)
+    return out
+
+
+def method_renders(name, spec, j, spp, cache_dir, threads, deadline, upto):
+    """Paths of method j's first `upto` renders, rendering the missing ones while time is left (past
+    the deadline, only up to MIN_RENDERS); returns (paths, render seconds, command template)."""
+    method = spec["methods"][j][0]
+    paths, seconds, template = [], 0.0, None
+    for i in range(upto):
+        seed = METHOD_SEED0[j] + i
+        path = os.path.join(cache_dir, "%s-%s-%dspp-seed%d.exr" % (method, spec["resolution"], spp, seed))
+        meta = path + ".json"
+        if not os.path.exists(meta):
+            if deadline and time.time() > deadline and i >= MIN_RENDERS:
+                break
+            t0 = time.time()
+            s, tpl = run_render(method, spec["scene"], spec["resolution"], spp, seed, path, threads)
+            with open(meta, "w") as f:
+                json.dump({"seconds": s, "command": tpl, "git": git_revision()}, f)
+            log("  %s %s seed %d: %.1f s (wall %.1f s)" % (name, method, seed, s, time.time() - t0))
+        with open(meta) as f:
+            m = json.load(f)
+        paths.append(path)
+        seconds += m["seconds"]
+        template = template or m["command"]
+    return paths, seconds, template
+
+
+def make_one(name, out_dir, threads, scale, budget):
+    import numpy as np
     import exr_io
-    db_path = os.path.join(REFS, "refs.json")
-    with open(db_path) as f:
-        db = json.load(f)
-    for name in names:
-        new = fnv1a64_of_file(os.path.join(ROOT, SCENES[name][0]))
-        for suffix in ("", "-stderr"):
-            path = os.path.join(REFS, name + suffix + ".exr")
-            pixels, meta = exr_io.read_exr(path)
-            meta = {k: v for k, v in meta.items() if k.startswith("tessera:")}
-            meta["tessera:scene_hash"] = new
-            exr_io.write_exr(path, pixels, meta)
-        db[name]["scene_hash"] = new
-        print("%s: scene_hash %s" % (name, new), file=sys.stderr)
-    with open(db_path, "w") as f:
-        json.dump(db, f, indent=1)
-        f.write("\n")
-    write_readme(db)
-    return 0
+    import make_refs_stats as st
+    spec = SCENES[name]
+    key = settings_key(name, spec, scale)
+    cache_dir = os.path.join(CACHE, "%s-%s-%s" % (name, key, fnv1a64_of_file(os.path.join(ROOT, spec["scene"]))[-8:]))
+    os.makedirs(cache_dir, exist_ok=True)
+    methods = [(m, max(1, int(round(spp * scale)))) for m, spp in spec["methods"]]
+    deadline = time.time() + budget if budget else None
+    # Interleave the methods' renders so that a budget cut leaves every method with renders.
+    sets = [None] * len(methods)
+    for i in range(1, K + 1):
+        for j, (m, spp) in enumerate(methods):
+            sets[j] = method_renders(name, spec, j, spp, cache_dir, threads, deadline, i)
+    if any(len(s[0]) < 2 for s in sets):
+        raise RuntimeError("%s: too few renders within the budget" % name)
+    complete = all(len(s[0]) == K for s in sets)
+    stacks = [np.stack([exr_io.read_exr(p)[0] for p in s[0]]) for s in sets]
+    h, w = stacks[0].shape[1:3]
+    tw, th = (int(v) for v in spec["test_resolution"].split("x"))
+    f = w // tw
+    assert f * tw == w and f * th == h, "test resolution must divide the reference's"
+    means, ses = zip(*[st.mean_and_stderr(s) for s in stacks])
+    valid = [np.ones((h, w), bool) for _ in methods]
+    mask = None
+    if spec["mask"] == "direct-delta":
+        mpath = os.path.join(cache_dir, "direct-delta.exr")
+        if not os.path.exists(mpath):
+            derived = direct_delta_scene(spec["scene"])
+            try:
+                run_render("ptnee", os.path.relpath(derived, ROOT), spec["resolution"], 16, 1, mpath, threads)
+            finally:
+                os.remove(derived)
+        coverage = exr_io.read_exr(mpath)[0].max(axis=2)
+        # Pixels lt samples completely: no delta surface in them or their 8 neighbours (16 spp can
+        # miss a sliver of an edge pixel).
+        mask = st.box_blur(coverage[:, :, None], 1)[:, :, 0] <= 0.0
+        for j, (m, _) in enumerate(methods):
+            if m == "lt":
+                valid[j] = mask
+    if spec["analytic"]:
+        ref = np.broadcast_to(np.array(spec["analytic"], float), means[0].shape).copy()
+        ref_se = np.zeros_like(ref)
+    else:
+        ref, ref_se = st.combine(list(means), list(ses), valid)
+    judged, judged_spp = methods[0]
+    judged_se = st.judged_stderr(stacks[0], f)
+    judged_spp_total = judged_spp * len(sets[0][0]) * f * f  # samples per test-resolution pixel
+    # Noise margin: a TEST_SPP render's expected squared error at the test resolution over the reference's.
+    test_var = judged_se ** 2 * judged_spp_total / TEST_SPP
+    ref_var = st.box_downsample(ref_se ** 2, f) / (f * f)
+    margin = float(test_var.mean() / ref_var.mean()) if ref_var.mean() > 0 else None  # None: exact
+    # Equivalent judged-integrator spp of the reference at its own resolution.
+    ses0_var = (ses[0] ** 2).mean() * judged_spp * len(sets[0][0])
+    equiv_spp = float(ses0_var / (ref_se ** 2).mean()) if (ref_se ** 2).mean() > 0 else None
+    rev = git_revision()
+    entry = {
+        "scene": spec["scene"], "resolution": spec["resolution"], "test_resolution": spec["test_resolution"],
+        "integrator": judged, "settings": key, "complete": complete, "git": rev,
+        "scene_hash": fnv1a64_of_file(os.path.join(ROOT, spec["scene"])),
+        "methods": [{"method": m, "spp": spp, "renders": len(s[0]), "seeds": "%d-%d" % (METHOD_SEED0[j], METHOD_SEED0[j] + len(s[0]) - 1),
+                     "render_seconds": round(s[1], 1), "command": s[2],
+                     "mean_rgb": [round(float(x), 6) for x in means[j].mean(axis=(0, 1))],
+                     "covers": "outside the direct-delta mask" if (m == "lt" and mask is not None) else "every pixel"}
+                    for j, ((m, spp), s) in enumerate(zip(methods, sets))],
+        "reference": "analytic" if spec["analytic"] else "inverse-variance combination of " + " + ".join(m for m, _ in methods),
+        "mean_rgb": [round(float(x), 6) for x in ref.mean(axis=(0, 1))],
+        "median_relative_stderr": float(np.median(ref_se / np.maximum(ref, 1e-3))),
+        "noise_margin": margin, "equivalent_judged_spp": equiv_spp,
+        "why": spec["why"], "independent": spec["independent"],
+    }
+    if mask is not None:
+        entry["mask_pixels_excluded"] = float(1.0 - mask.mean())
+    entry["agreement"] = []
+    if spec["analytic"]:
+        for j, (m, _) in enumerate(methods):
+            entry["agreement"].append(dict(st.agreement(ref, ref_se, means[j], ses[j]), a="analytic", b=m))
+    for j in range(1, len(methods)):
+        entry["agreement"].append(dict(st.agreement(means[0], ses[0], means[j], ses[j],
+                                                    valid[j] if methods[j][0] == "lt" else None),
+                                       a=methods[0][0], b=methods[j][0]))
+    write_outputs(name, out_dir, entry, ref, ref_se, judged_se, judged, judged_spp_total, f)
+    if mask is not None:
+        # The pixels every method samples well (1) and those seen directly in a mirror or through glass
+        # (0): tools/study judges the scene on the former only (refs/README.md says why).
+        m = np.repeat(mask[:, :, None].astype(float), 3, axis=2)
+        exr_io.write_exr(os.path.join(out_dir, name + "-mask.exr"), m,
+                         {"tessera:made_by": "tools/make_refs.py", "tessera:scene": spec["scene"],
+                          "tessera:kind": "1 = no mirror or glass seen directly in the pixel or its neighbours"},
+                         half=True)
+        entry["files"][name + "-mask.exr"] = {"bytes": os.path.getsize(os.path.join(out_dir, name + "-mask.exr")),
+                                              "type": "half"}
+    return entry
+
+
+def write_outputs(name, out_dir, entry, ref, ref_se, judged_se, judged, judged_spp_total, f):
+    import exr_io
+    import make_refs_stats as st
+    attrs = {
+        "tessera:made_by": "tools/make_refs.py", "tessera:scene": entry["scene"],
+        "tessera:scene_hash": entry["scene_hash"], "tessera:resolution": entry["resolution"],
+        "tessera:integrator": judged, "tessera:git": entry["git"], "tessera:reference": entry["reference"],
+        "tessera:methods": json.dumps(entry["methods"]), "tessera:max_depth": "-1",
+    }
+    os.makedirs(os.path.join(out_dir, "thumbs"), exist_ok=True)
+    ref_se = st.lift_stderr(ref_se)
+    judged_se = st.lift_stderr(judged_se)
+    sizes = {}
+    for suffix, img, kind, is_se, extra in (
+            ("", ref, "reference", False, {}),
+            ("-stderr", ref_se, "standard error of the reference", True, {}),
+            ("-%s-stderr" % judged, judged_se, "standard error of the judged integrator's mean at the test resolution",
+             True, {"tessera:spp_total": judged_spp_total, "tessera:downsample": f,
+                    "tessera:test_resolution": entry["test_resolution"]})):
+        path = os.path.join(out_dir, name + suffix + ".exr")
+        # An analytic reference stays float32: half would round 1/0.7 by 1e-4 relative (and it
+        # compresses to nothing either way).
+        analytic = suffix == "" and entry["reference"] == "analytic"
+        half = st.storage_type(img, is_se) == "half" and not analytic
+        if not half and not analytic:
+            img = st.round_to_half_precision(img)
+        exr_io.write_exr(path, img, dict(attrs, **extra, **{"tessera:kind": kind}), half=half)
+        sizes[os.path.basename(path)] = (os.path.getsize(path), "half" if half else "float")
+    entry["files"] = {k: {"bytes": v[0], "type": v[1]} for k, v in sizes.items()}
+    exr_io.write_thumbnail(os.path.join(out_dir, "thumbs", name + ".png"), ref)
 
 
 def main(argv):
+    import make_refs_readme
     args = argv[1:]
     if args and args[0] == "--rehash":
         unknown = [a for a in args[1:] if a not in SCENES]
         if unknown or not args[1:]:
             print("--rehash needs scene names; unknown: " + ", ".join(unknown))
             return 2
-        return rehash(args[1:])
-    threads, scale, out_dir = 2, 1.0, REFS
+        return make_refs_readme.rehash(args[1:])
+    threads, scale, out_dir, budget, force = 2, 1.0, REFS, None, False
     names = []
     while args:
         a = args.pop(0)
@@ -348,11 +417,14 @@ def main(argv):
         elif a == "--scale":
             scale = float(args.pop(0))
             out_dir = None
+        elif a == "--force":
+            force = True
+        elif a == "--budget":
+            budget = float(args.pop(0))
         elif a == "--out":
             out_dir = args.pop(0)
         elif a == "--readme":
-            with open(os.path.join(REFS, "refs.json")) as f:
-                write_readme(json.load(f))
+            make_refs_readme.write_readme(make_refs_readme.load_db())
             return 0
         elif a in SCENES:
             names.append(a)
@@ -372,19 +444,33 @@ def main(argv):
     RUN_BINARY = os.path.join(bindir, "tessera")
     shutil.copy2(TESSERA, RUN_BINARY)
     db_path = os.path.join(out_dir, "refs.json")
-    db = {}
-    if os.path.exists(db_path):
-        with open(db_path) as f:
-            db = json.load(f)
+    db = make_refs_readme.load_db(db_path)
+    failed = []
     for name in names or list(SCENES):
-        print("reference %s" % name, file=sys.stderr, flush=True)
-        db[name] = make_one(name, out_dir, threads, scale)
-        with open(db_path, "w") as f:
-            json.dump({k: db[k] for k in SCENES if k in db}, f, indent=1)
+        e = db.get(name, {})
+        if (not force and e.get("settings") == settings_key(name, SCENES[name], scale) and e.get("complete") and
+                e.get("scene_hash") == fnv1a64_of_file(os.path.join(ROOT, SCENES[name]["scene"])) and
+                os.path.exists(os.path.join(out_dir, name + ".exr"))):
+            log("reference %s: up to date" % name)
+            continue
+        log("reference %s" % name)
+        try:
+            entry = make_one(name, out_dir, threads, scale, budget)
+        except (RuntimeError, OSError, ValueError) as err:
+            log("reference %s: FAILED, left as it was: %s" % (name, err))
+            failed.append(name)
+            continue
+        db = make_refs_readme.load_db(db_path)  # another run may have finished a scene meanwhile
+        db[name] = entry
+        with open(db_path + ".tmp", "w") as f:
+            json.dump({k: db[k] for k in list(SCENES) + sorted(set(db) - set(SCENES)) if k in db}, f, indent=1)
             f.write("\n")
-    if out_dir == REFS:
-        write_readme(db)
-    return 0
+        os.replace(db_path + ".tmp", db_path)
+        if out_dir == REFS:
+            make_refs_readme.write_readme(db)
+    if failed:
+        log("failed: " + " ".join(failed))
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

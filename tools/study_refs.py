@@ -2,7 +2,7 @@
 
 A reference is refs/<name>.exr (any depth below refs/, except refs/study/) with, when present, its
 per-pixel standard-error image beside it (refs/<name>.stderr.exr or one of the spellings in
-STDERR_SUFFIXES). The scene it shows comes from the EXR's `tessera:scene` attribute, written by every
+STDERR_SUFFIXES) and, when present, a mask (refs/<name>-mask.exr: the pixels the scene is judged on). The scene it shows comes from the EXR's `tessera:scene` attribute, written by every
 `tessera render`; failing that, from scenes/**/<name>.gltf. So new references join the study by being
 committed, with no list to edit.
 """
@@ -18,12 +18,15 @@ STDERR_SUFFIXES = [".stderr.exr", "-stderr.exr", "_stderr.exr", ".se.exr", "-se.
                    ".sem.exr", "-sem.exr"]
 # Variance companions are accepted too (square-rooted on reading).
 VARIANCE_SUFFIXES = [".variance.exr", "-variance.exr", "_variance.exr", ".var.exr", "-var.exr"]
+# The mask companion (tools/make_refs.py): 1 where every method samples well; the study judges only
+# those pixels (the others are zeroed in the reference and in every render before any metric).
+MASK_SUFFIX = "-mask.exr"
 
 
 class Reference:
     """One reference image: its name, scene, resolution, pixels and standard error (or None)."""
 
-    def __init__(self, name, path, scene, rgb, stderr, meta, stderr_path):
+    def __init__(self, name, path, scene, rgb, stderr, meta, stderr_path, mask=None):
         self.name = name
         self.path = path
         self.scene = scene
@@ -31,6 +34,7 @@ class Reference:
         self.stderr = stderr  # float64 [H, W, 3] or None
         self.meta = meta
         self.stderr_path = stderr_path
+        self.mask = mask  # bool [H, W] or None
 
     @property
     def width(self):
@@ -43,7 +47,7 @@ class Reference:
 
 def _is_companion(path):
     low = path.lower()
-    return any(low.endswith(s) for s in STDERR_SUFFIXES + VARIANCE_SUFFIXES)
+    return any(low.endswith(s) for s in STDERR_SUFFIXES + VARIANCE_SUFFIXES + [MASK_SUFFIX])
 
 
 def _find_scene(root, name, meta):
@@ -89,7 +93,13 @@ def discover(root, refs_dir, names=None, warn=print):
                 break
         if stderr is None:
             warn(f"study: {path}: no standard-error image beside it: reference noise not subtracted")
-        found.append(Reference(name, path, scene, rgb, stderr, meta, stderr_path))
+        mask = None
+        if os.path.isfile(base + MASK_SUFFIX):
+            mask = read_exr(base + MASK_SUFFIX)[0][:, :, 0] > 0.5
+            if mask.shape != rgb.shape[:2]:
+                warn(f"study: {base + MASK_SUFFIX}: size differs from {path}: ignored")
+                mask = None
+        found.append(Reference(name, path, scene, rgb, stderr, meta, stderr_path, mask))
     if names:  # in the order asked for
         found.sort(key=lambda r: names.index(r.name))
         missing = sorted(set(names) - {r.name for r in found})

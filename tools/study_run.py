@@ -36,6 +36,14 @@ class SceneStudy:
         self.factor = f
         self.rgb = study_refs.box_downsample(ref.rgb, f)
         self.se = study_refs.box_downsample_stderr(ref.stderr, f)
+        # A masked reference: only pixels wholly inside the mask count; the rest is zeroed here and in
+        # every render (one(), before `tessera compare` and the metrics).
+        self.mask = None
+        if ref.mask is not None:
+            self.mask = study_refs.box_downsample(ref.mask[:, :, None].astype(float), f)[:, :, 0] > 0.999
+            self.rgb = np.where(self.mask[:, :, None], self.rgb, 0.0)
+            if self.se is not None:
+                self.se = np.where(self.mask[:, :, None], self.se, 0.0)
         self.resolution = (self.rgb.shape[1], self.rgb.shape[0])
         self.ref_path = os.path.join(tmp, f"{ref.name}-ref.exr")
         exr_io.write_exr(self.ref_path, self.rgb)
@@ -57,6 +65,9 @@ class SceneStudy:
     def one(self, integrator, accel, spp, seed):
         exr = os.path.join(self.tmp, f"{self.ref.name}-{integrator}-{accel}-{spp}-{seed}.exr")
         j = self.tess.render(self.ref.scene, exr, integrator, accel, spp, seed, self.resolution, self.max_depth)
+        if self.mask is not None:
+            rgb, _ = exr_io.read_exr(exr)
+            exr_io.write_exr(exr, np.where(self.mask[:, :, None], rgb, 0.0))
         c = self.tess.compare(exr, self.ref_path)
         rgb, _ = exr_io.read_exr(exr)
         os.remove(exr)
@@ -176,14 +187,22 @@ def study_scene(args, tess, ref, tmp, integrators, accels):
     summary = [s for s in (summarise(study, *k) for k in study.pooled) if s]
     if ref.stderr is None:
         notes.append(f"{ref.name}: no standard-error image for the reference: its noise is not subtracted.")
+    if study.mask is not None:
+        notes.append(mask_note(ref.name, study.mask))
     return {"runs": study.runs, "summary": summary, "floor": study.floor, "failures": study.failures, "notes": notes}
+
+
+def mask_note(name, mask):
+    return (f"{name}: judged on the {100 * mask.mean():.1f}% of pixels that refs/{name}-mask.exr keeps (no mirror "
+            f"or glass seen directly): every render and the reference are zeroed elsewhere before any metric.")
 
 
 def cache_key(args, ref, integrators, accels):
     """What a cached scene depends on: reference and scene bytes, study code version and settings. Not
     the renderer binary: a resumed study trusts that merges in between did not change its images."""
     h = hashlib.sha256()
-    for path in (ref.path, ref.stderr_path, ref.scene):
+    mask_path = ref.path[:-4] + study_refs.MASK_SUFFIX
+    for path in (ref.path, ref.stderr_path, ref.scene) + ((mask_path,) if os.path.isfile(mask_path) else ()):
         if path and os.path.isfile(path):
             with open(path, "rb") as f:
                 h.update(f.read())
