@@ -158,15 +158,22 @@ def main(argv):
         json.dump({"means_check": c, "reference_spp": ref_spp, "runs": runs, "argv": argv}, f, indent=1)
 
     whos = [f"tessera-{s}" for s in a.samplers] + ["cycles"]
-    head = "| spp | " + " | ".join(f"{w}: s / relMSE / relMSE×s" for w in whos) + " |"
-    lines = [head, "|---" * (len(whos) + 1) + "|"]
+    # Seconds: median and range over the repeats (the machine may be shared); relMSE: mean over the
+    # repeats' seeds. The last columns: Cycles' relMSE×s over each Tessera sampler's (above 1: Tessera
+    # ahead at equal time).
+    head = ("| spp | " + " | ".join(f"{w}: s (min–max) / relMSE / relMSE×s" for w in whos) + " | "
+            + " | ".join(f"Cycles / {w}" for w in whos[:-1]) + " |")
+    lines = [head, "|---" * (2 * len(whos)) + "|"]
     for spp in a.spps:
-        cells = []
+        cells, work = [], {}
         for w in whos:
             rs = [r for r in runs if r["who"] == w and r["spp"] == spp]
-            s = statistics.median(r["seconds"] for r in rs)
+            secs = [r["seconds"] for r in rs]
+            s = statistics.median(secs)
             e = statistics.mean(r["relmse"] for r in rs)
-            cells.append(f"{s:.2f} / {e:.3g} / {e * s:.3g}")
+            work[w] = e * s
+            cells.append(f"{s:.2f} ({min(secs):.2f}–{max(secs):.2f}) / {e:.3g} / {e * s:.3g}")
+        cells += [f"{work['cycles'] / work[w]:.2f}×" for w in whos[:-1]]
         lines.append(f"| {spp} | " + " | ".join(cells) + " |")
     table = "\n".join(lines)
     dm = [100.0 * (t / r - 1.0) for t, r in zip(c["mean_test"], c["mean_ref"])]
