@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Tessera against Blender's Cycles at equal time on the same glTF scene, one thread each.
 
-    tools/cycles_compare.py                      # Cornell box, 256x256, 16-1024 spp -> markdown table
+    tools/cycles_compare.py                      # Cornell box, 256x256, 16-1024 spp, 3 repeats -> markdown table
     tools/cycles_compare.py --spps 16 64 --ref-spp 8192 --out out/cycles
 
 Packages: `bash tools/bootstrap.sh --install cycles` (Debian's blender). Steps:
@@ -43,7 +43,7 @@ def parse(argv):
     p.add_argument("--ref-threads", type=int, default=2)
     p.add_argument("--ref-existing", action="store_true",
                    help="render no reference chunk: use the mean of the chunks already in --out (at least one)")
-    p.add_argument("--repeats", type=int, default=1)
+    p.add_argument("--repeats", type=int, default=3, help="renders per renderer and spp, interleaved, each with its own seed")
     p.add_argument("--out", default=os.path.join(ROOT, "out", "cycles"))
     p.add_argument("--score-only", action="store_true",
                    help="render nothing: score the renders listed in --out's runs file (written before scoring)")
