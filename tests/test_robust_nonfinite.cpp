@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 #include <stdexcept>
 
@@ -212,12 +213,17 @@ TEST(DebugPixel, ReplayEqualsTheOneSampleRenderBitForBit) {
             }
         }
         // Next-event estimation lights almost every pixel at 1 spp; pure path tracing rarely does.
+        // The densities are counted against the vertices the six replays made (how long the paths
+        // are depends on the sampler's draws): in this all-diffuse box every vertex samples the
+        // BSDF, and in ptnee a light, but perhaps one (a vertex on the light itself).
+        std::cout << integrator << ": " << total.vertexLines << " vertices, " << total.bsdfPdfs << " BSDF and "
+                  << total.lightPdfs << " light samples\n";
         if (std::string(integrator) == "ptnee") {
             EXPECT_GT(nonZero, 6) << "most of these pixels see lit surfaces";
-            EXPECT_GT(total.lightPdfs, 6) << "ptnee samples a light at (almost) every vertex";
+            EXPECT_GE(total.lightPdfs, total.vertexLines - 1) << "ptnee samples a light at (almost) every vertex";
         }
         EXPECT_GE(total.vertexLines, 3) << integrator << ": three of the six pixels see the box";
-        EXPECT_GE(total.bsdfPdfs, 6) << integrator << ": a BSDF sample at (almost) every vertex";
+        EXPECT_GE(total.bsdfPdfs, total.vertexLines - 1) << integrator << ": a BSDF sample at (almost) every vertex";
     }
     // Light tracing and BDPT: sub-path vertices with their area densities, and per (s,t) strategy
     // the contribution (and for BDPT the MIS weight).

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Tessera against Blender's Cycles at equal time on the same glTF scene, one thread each.
 
-    tools/cycles_compare.py                      # Cornell box, 256x256, 16-1024 spp -> markdown table
+    tools/cycles_compare.py                      # Cornell box, 256x256, 16-1024 spp, 3 repeats -> markdown table
     tools/cycles_compare.py --spps 16 64 --ref-spp 8192 --out out/cycles
 
 Packages: `bash tools/bootstrap.sh --install cycles` (Debian's blender). Steps:
@@ -43,7 +43,7 @@ def parse(argv):
     p.add_argument("--ref-threads", type=int, default=2)
     p.add_argument("--ref-existing", action="store_true",
                    help="render no reference chunk: use the mean of the chunks already in --out (at least one)")
-    p.add_argument("--repeats", type=int, default=1)
+    p.add_argument("--repeats", type=int, default=3, help="renders per renderer and spp, interleaved, each with its own seed")
     p.add_argument("--out", default=os.path.join(ROOT, "out", "cycles"))
     p.add_argument("--score-only", action="store_true",
                    help="render nothing: score the renders listed in --out's runs file (written before scoring)")
@@ -158,15 +158,22 @@ def main(argv):
         json.dump({"means_check": c, "reference_spp": ref_spp, "runs": runs, "argv": argv}, f, indent=1)
 
     whos = [f"tessera-{s}" for s in a.samplers] + ["cycles"]
-    head = "| spp | " + " | ".join(f"{w}: s / relMSE / relMSE×s" for w in whos) + " |"
-    lines = [head, "|---" * (len(whos) + 1) + "|"]
+    # Seconds: median and range over the repeats (the machine may be shared); relMSE: mean over the
+    # repeats' seeds. The last columns: Cycles' relMSE×s over each Tessera sampler's (above 1: Tessera
+    # ahead at equal time).
+    head = ("| spp | " + " | ".join(f"{w}: s (min–max) / relMSE / relMSE×s" for w in whos) + " | "
+            + " | ".join(f"Cycles / {w}" for w in whos[:-1]) + " |")
+    lines = [head, "|---" * (2 * len(whos)) + "|"]
     for spp in a.spps:
-        cells = []
+        cells, work = [], {}
         for w in whos:
             rs = [r for r in runs if r["who"] == w and r["spp"] == spp]
-            s = statistics.median(r["seconds"] for r in rs)
+            secs = [r["seconds"] for r in rs]
+            s = statistics.median(secs)
             e = statistics.mean(r["relmse"] for r in rs)
-            cells.append(f"{s:.2f} / {e:.3g} / {e * s:.3g}")
+            work[w] = e * s
+            cells.append(f"{s:.2f} ({min(secs):.2f}–{max(secs):.2f}) / {e:.3g} / {e * s:.3g}")
+        cells += [f"{work['cycles'] / work[w]:.2f}×" for w in whos[:-1]]
         lines.append(f"| {spp} | " + " | ".join(cells) + " |")
     table = "\n".join(lines)
     dm = [100.0 * (t / r - 1.0) for t, r in zip(c["mean_test"], c["mean_ref"])]

@@ -100,7 +100,7 @@ Scene loadScene(const SceneOptions& a) {
 
 void addSamplerOption(CLI::App& cmd, SceneOptions& o) {
     cmd.add_option("--sampler", o.sampler,
-                   "random numbers: independent (PCG32 per sample, default) or sobol (Owen-scrambled Sobol')");
+                   "random numbers: sobol (Owen-scrambled Sobol', default) or independent (PCG32 per sample)");
 }
 
 RenderSettings resolveRenderSettings(const SceneOptions& a, const Scene& scene) {
