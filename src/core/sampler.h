@@ -34,8 +34,10 @@ inline uint32_t reverseBits32(uint32_t v) {
     return ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
 }
 
-/// Laine-Karras style hash in which each output bit depends only on the input bits at or below it
-/// (Burley 2020, §3, the improved constants of his Listing 3).
+/// Laine & Karras's (2011) permutation, each output bit depending only on the input bits at or below
+/// it, with their constants as Burley 2020 (§3) uses it. Its seed is added, so the leading bits see
+/// one fixed permutation and a shift; Vegdahl's 2021 variant (a seed multiply, new constants) is
+/// closer to a true Owen scramble, and would change every sobol image.
 inline uint32_t laineKarrasPermutation(uint32_t x, uint32_t seed) {
     x += seed;
     x ^= x * 0x6c50b47cu;
