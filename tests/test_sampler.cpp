@@ -256,6 +256,25 @@ TEST(Sampler, IndependentKindIsThePcgStreamAndIgnoresBlocks) {
     EXPECT_FALSE(parseSamplerKind("halton").has_value());
 }
 
+// skip2D (a pinhole camera's lens draw in a lens connection) consumes a draw without computing it:
+// every later draw is the one a get2D there would have left, for both kinds.
+TEST(Sampler, Skip2DLeavesTheLaterDrawsAsGet2DWould) {
+    for (SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Independent}) {
+        Sampler a(Vec2i(5, 6), 9, 3, kind), b(Vec2i(5, 6), 9, 3, kind);
+        a.startConnection(3, 1);
+        b.startConnection(3, 1);
+        Vec2f skipped = a.get2D();
+        b.skip2D();
+        Vec2f x = a.get2D(), y = b.get2D();
+        EXPECT_EQ(x, y) << samplerName(kind);
+        EXPECT_NE(x, skipped) << samplerName(kind);
+        EXPECT_EQ(a.get1D(), b.get1D()) << samplerName(kind);
+        a.startBounce(2);
+        b.startBounce(2);
+        EXPECT_EQ(a.get2D(), b.get2D()) << samplerName(kind);
+    }
+}
+
 TEST(Sampler, DrawsArePureFunctionsOfPixelIndexSeedAndDimension) {
     // The same key gives the same value whatever was drawn before in other blocks.
     Sampler a(Vec2i(1, 2), 33, 5, SamplerKind::Sobol), b(Vec2i(1, 2), 33, 5, SamplerKind::Sobol);

@@ -95,6 +95,17 @@ Scene cubeScene(Rgb sigma) {
 
 }  // namespace
 
+// Scenes without an absorbing volume skip the bidirectional connections' per-segment test
+// (Scene::hasVolumes): it must see a volume material, and nothing else.
+TEST(VolumeAttenuation, SceneKnowsWhetherItHasAVolume) {
+    EXPECT_TRUE(cubeScene(sigmaOf(kAttenuationColor, kAttenuationDistance)).hasVolumes());
+    EXPECT_FALSE(cubeScene(Rgb(0.f)).hasVolumes()) << "sigma_a = 0 attenuates nothing";
+    Scene thin = cubeScene(Rgb(0.5f));
+    thin.materials[0].bsdf.thinWalled = true;  // KHR_materials_volume thickness 0: a surface, no volume
+    thin.finalize();
+    EXPECT_FALSE(thin.hasVolumes());
+}
+
 // The rule is one function of the two ends, each tested looking away from itself: the same
 // segment gets the same transmittance from either end, only on the back side of a volume's
 // surface, and the σa = 0 / thin-walled cases report "not attenuating" (callers multiply nothing).

@@ -142,6 +142,13 @@ public:
         return bitsToUnitFloat(reverseBits32(laineKarrasPermutation(idx, uint32_t(h >> 32))));
     }
 
+    /// Consumes the next 2D draw without computing it, leaving every later draw exactly as get2D
+    /// would have: for a draw whose value is not needed (a pinhole camera's lens point).
+    void skip2D() {
+        if (kind_ == SamplerKind::Independent) rng_.next2D();
+        else ++slot_;
+    }
+
     Vec2f get2D() {
         if (kind_ == SamplerKind::Independent) return rng_.next2D();
         uint32_t slot = slot_++;

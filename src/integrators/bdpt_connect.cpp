@@ -160,7 +160,12 @@ ConnectionResult connectLens(const RenderContext& ctx, std::span<const PathVerte
     const PathVertex& qs = light[size_t(s - 1)];
     if (!qs.connectible()) return r;
     CameraSample cs;
-    if (!ctx.camera.sampleIncoming(qs.p, sampler.get2D(), cs)) return r;
+    // A pinhole has a single lens point: its draw is skipped rather than computed (the draws after
+    // it, and so the image, stay the same).
+    Vec2f uLens(0.5f);
+    if (ctx.camera.isPinhole()) sampler.skip2D();
+    else uLens = sampler.get2D();
+    if (!ctx.camera.sampleIncoming(qs.p, uLens, cs)) return r;
     PathVertex lens;
     lens.type = VertexType::Camera;
     lens.p = cs.pLens;

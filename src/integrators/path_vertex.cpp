@@ -40,36 +40,47 @@ float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVerte
     return convertDensity(pdfW, cur, next);
 }
 
-void pdfBothWaysA(const RenderContext& ctx, const PathVertex& a, const PathVertex& cur, const PathVertex& b, float& pdfToBA,
-                  float& pdfToAA) {
+void pdfBothWaysA(const RenderContext& ctx, const PathVertex& pred, const PathVertex& cur, const PathVertex& b, float& pdfToBA,
+                  float& pdfToPredA) {
     if (cur.type != VertexType::Surface) {
-        pdfToBA = pdfNextA(ctx, &a, cur, b);
-        pdfToAA = pdfNextA(ctx, &b, cur, a);
+        pdfToBA = pdfNextA(ctx, &pred, cur, b);
+        pdfToPredA = pdfNextA(ctx, &b, cur, pred);
         return;
     }
-    pdfBothWaysA(ctx, SurfaceBsdf(cur.bsdf, cur.ns, cur.ng), a, cur, b, pdfToBA, pdfToAA);
+    pdfBothWaysA(ctx, SurfaceBsdf(cur.bsdf, cur.ns, cur.ng), pred, cur, b, pdfToBA, pdfToPredA);
 }
 
-void pdfBothWaysA(const RenderContext& ctx, const SurfaceBsdf& bsdfAtCur, const PathVertex& a, const PathVertex& cur,
-                  const PathVertex& b, float& pdfToBA, float& pdfToAA) {
+void pdfBothWaysA(const RenderContext& ctx, const SurfaceBsdf& bsdfAtCur, const PathVertex& pred, const PathVertex& cur,
+                  const PathVertex& b, float& pdfToBA, float& pdfToPredA) {
     // The same directions, frame, side test and BSDF inputs serve both densities: one SurfaceBsdf,
-    // and each segment's length computed once for its direction and its solid-angle-to-area factor.
-    // The arithmetic is that of directionTo and convertDensity, so the densities are bit-identical
-    // to two pdfNextA calls. Vertices at infinity and coincident points take the general route.
-    Vec3f db = b.p - cur.p, da = a.p - cur.p;
-    float dist2B = glm::dot(db, db), dist2A = glm::dot(da, da);
-    if (a.atInfinity || b.atInfinity || !(dist2A > 0.f) || !(dist2B > 0.f)) {
-        pdfToBA = pdfNextA(ctx, &a, cur, b);
-        pdfToAA = pdfNextA(ctx, &b, cur, a);
+    // and each segment's length computed once for its direction and its solid-angle-to-area factor
+    // (the segment to the predecessor once per vertex, by the walk: PathVertex::toPrev). The
+    // arithmetic is that of directionTo and convertDensity, so the densities are bit-identical to
+    // two pdfNextA calls. Vertices at infinity and coincident points take the general route.
+    Vec3f db = b.p - cur.p, da = pred.p - cur.p;
+    float dist2B = glm::dot(db, db), dist2Pred, lenPred;
+    Vec3f toPred;
+    if (cur.toPrevLen > 0.f && cur.prevP == pred.p) {
+        dist2Pred = cur.toPrevDist2;
+        lenPred = cur.toPrevLen;
+        toPred = cur.toPrev;
+    } else {
+        dist2Pred = glm::dot(da, da);
+        lenPred = std::sqrt(dist2Pred);
+        toPred = da / lenPred;
+    }
+    if (pred.atInfinity || b.atInfinity || !(dist2Pred > 0.f) || !(dist2B > 0.f)) {
+        pdfToBA = pdfNextA(ctx, &pred, cur, b);
+        pdfToPredA = pdfNextA(ctx, &b, cur, pred);
         return;
     }
-    float lenB = std::sqrt(dist2B), lenA = std::sqrt(dist2A);
-    float pdfToBW, pdfToAW;
-    bsdfAtCur.pdfBothW(da / lenA, db / lenB, pdfToBW, pdfToAW);
+    float lenB = std::sqrt(dist2B);
+    float pdfToBW, pdfToPredW;
+    bsdfAtCur.pdfBothW(toPred, db / lenB, pdfToBW, pdfToPredW);
     pdfToBA = pdfToBW / dist2B;
     if (b.onSurface()) pdfToBA *= std::abs(glm::dot(b.ng, db)) / lenB;
-    pdfToAA = pdfToAW / dist2A;
-    if (a.onSurface()) pdfToAA *= std::abs(glm::dot(a.ng, da)) / lenA;
+    pdfToPredA = pdfToPredW / dist2Pred;
+    if (pred.onSurface()) pdfToPredA *= std::abs(glm::dot(pred.ng, da)) / lenPred;
 }
 
 float pdfLightOriginA(const RenderContext& ctx, const PathVertex& v) {
@@ -130,6 +141,8 @@ Rgb endSigma(const RenderContext& ctx, const PathVertex& v, const PathVertex& ot
 }  // namespace
 
 Rgb segmentTransmittance(const RenderContext& ctx, const PathVertex& a, const PathVertex& b, bool& attenuates) {
+    attenuates = false;
+    if (!ctx.scene.hasVolumes()) return Rgb(1.f);
     Rgb sigmaA = endSigma(ctx, a, b), sigmaB = endSigma(ctx, b, a);
     attenuates = segmentAttenuates(sigmaA, sigmaB);
     if (!attenuates) return Rgb(1.f);
@@ -212,6 +225,17 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         }
         // The segment just traced: Beer–Lambert inside a volume (the same rule as the connections).
         // Roulette keeps looking at the BSDF weights only (as in pt).
+        // The segment back to the predecessor, once for every density towards it (PathVertex::toPrev),
+        // with pdfBothWaysA's arithmetic.
+        if (const PathVertex& pred = out[n - 1]; !pred.atInfinity && !v.atInfinity) {
+            Vec3f d = pred.p - v.p;
+            if (float dist2 = glm::dot(d, d); dist2 > 0.f) {
+                v.prevP = pred.p;
+                v.toPrevDist2 = dist2;
+                v.toPrevLen = std::sqrt(dist2);
+                v.toPrev = d / v.toPrevLen;
+            }
+        }
         bool attenuates;
         Rgb T = segmentTransmittance(ctx, out[n - 1], v, attenuates);
         if (attenuates) beta *= T;

@@ -42,6 +42,15 @@ struct PathVertex {
     /// BDPT's MIS prefix M_j through this vertex (bdpt_mis.h, eq. (†)); filled by bdptMisPrefixes
     /// once both sub-paths are traced.
     double misPrefix = 0.0;
+    /// The segment to the predecessor on its own sub-path, from the two positions, as pdfBothWaysA
+    /// computes it: the predecessor's position, the unit direction towards it and the length. Set by
+    /// the random walks when both ends are points (toPrevLen > 0). Every density towards the
+    /// predecessor (the walk's, and each connection's at this end) reuses it instead of a square
+    /// root and three divisions; a copy of the vertex used next to another vertex (a test that
+    /// rearranges a path) recomputes, as `prevP` tells.
+    Vec3f prevP{0.f};
+    Vec3f toPrev{0.f};
+    float toPrevDist2 = 0.f, toPrevLen = 0.f;
 
     /// True where densities convert with the cosine at the vertex: surfaces and area-light points.
     bool onSurface() const {
@@ -82,14 +91,15 @@ inline float deltaDensityA(const PathVertex& cur, const PathVertex& next) { retu
 /// Area density at `next` of `cur` sampling `next`, given that `cur` was reached from `prev`
 /// (ignored for camera and light vertices): the BSDF, camera or light-emission direction density.
 float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVertex& cur, const PathVertex& next);
-/// pdfNextA(&a, cur, b) and pdfNextA(&b, cur, a) at once, bit-identical to the two calls: for a
-/// surface vertex both densities share one BSDF, frame and side test (the walks and the connection
-/// weights need both densities of the same vertex pair).
-void pdfBothWaysA(const RenderContext& ctx, const PathVertex& a, const PathVertex& cur, const PathVertex& b, float& pdfToBA,
-                  float& pdfToAA);
+/// pdfNextA(&pred, cur, b) and pdfNextA(&b, cur, pred) at once, bit-identical to the two calls:
+/// for a surface vertex both densities share one BSDF, frame and side test (the walks and the
+/// connection weights need both densities of the same vertex pair). `pred` is cur's predecessor on
+/// its own sub-path (the segment to it is cur's cached toPrev when the walk set it).
+void pdfBothWaysA(const RenderContext& ctx, const PathVertex& pred, const PathVertex& cur, const PathVertex& b, float& pdfToBA,
+                  float& pdfToPredA);
 /// pdfBothWaysA at a surface vertex whose BSDF a connection already built (to evaluate f there).
-void pdfBothWaysA(const RenderContext& ctx, const SurfaceBsdf& bsdfAtCur, const PathVertex& a, const PathVertex& cur,
-                  const PathVertex& b, float& pdfToBA, float& pdfToAA);
+void pdfBothWaysA(const RenderContext& ctx, const SurfaceBsdf& bsdfAtCur, const PathVertex& pred, const PathVertex& cur,
+                  const PathVertex& b, float& pdfToBA, float& pdfToPredA);
 /// For a vertex on an emitter (light vertex, or a surface vertex with lightIndex): pdfPosA of the
 /// light sub-path starting there (selection included); for a vertex at infinity the solid-angle
 /// density of its direction (selection included).

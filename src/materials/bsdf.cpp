@@ -81,13 +81,12 @@ bool isDeltaMaterial(const BsdfParams& m) {
 
 Rgb evalBsdf(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) {
     if (m.type == MaterialType::Pbr) return evalPbr(m, woIn, wiIn, mode);
+    if (m.type == MaterialType::Diffuse) return lambertEval(m.baseColor, woIn.z, wiIn.z);
     if (woIn.z == 0.f) return Rgb(0.f);
     // Two-sided: mirror the frame so that wo is above the surface.
     float flip = woIn.z < 0.f ? -1.f : 1.f;
     Vec3f wo(woIn.x, woIn.y, woIn.z * flip), wi(wiIn.x, wiIn.y, wiIn.z * flip);
     switch (m.type) {
-    case MaterialType::Diffuse:
-        return wi.z > 0.f ? m.baseColor * kInvPi : Rgb(0.f);
     case MaterialType::RoughConductor: {
         if (wi.z <= 0.f) return Rgb(0.f);
         Vec3f wm = wi + wo;
@@ -100,7 +99,8 @@ Rgb evalBsdf(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, Transpor
     }
     case MaterialType::Mirror:
     case MaterialType::Dielectric:
-    case MaterialType::Pbr:  // dispatched above
+    case MaterialType::Diffuse:  // dispatched above
+    case MaterialType::Pbr:
         return Rgb(0.f);
     }
     return Rgb(0.f);
@@ -108,12 +108,11 @@ Rgb evalBsdf(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, Transpor
 
 float pdfBsdfW(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn) {
     if (m.type == MaterialType::Pbr) return pdfPbr(m, woIn, wiIn);
+    if (m.type == MaterialType::Diffuse) return lambertPdfW(woIn.z, wiIn.z);
     if (woIn.z == 0.f) return 0.f;
     float flip = woIn.z < 0.f ? -1.f : 1.f;
     Vec3f wo(woIn.x, woIn.y, woIn.z * flip), wi(wiIn.x, wiIn.y, wiIn.z * flip);
     switch (m.type) {
-    case MaterialType::Diffuse:
-        return cosineHemispherePdfW(wi.z);
     case MaterialType::RoughConductor: {
         if (wi.z <= 0.f) return 0.f;
         Vec3f wm = wi + wo;
@@ -127,7 +126,8 @@ float pdfBsdfW(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn) {
     }
     case MaterialType::Mirror:
     case MaterialType::Dielectric:
-    case MaterialType::Pbr:  // dispatched above
+    case MaterialType::Diffuse:  // dispatched above
+    case MaterialType::Pbr:
         return 0.f;
     }
     return 0.f;

@@ -4,6 +4,7 @@
 /// away from the surface: `woLocal` towards the previous vertex, `wiLocal` towards the next.
 /// All BSDFs are two-sided: the frame is mirrored when wo lies below the shading normal.
 #include "core/math.h"
+#include "core/sampling.h"
 #include "materials/material.h"
 
 namespace tessera {
@@ -36,6 +37,18 @@ void finalizeBsdfParams(BsdfParams& p);
 /// plastic: delta coat over a diffuse base) is not delta; its samples say which lobe they took
 /// (BsdfSample::isDelta), and eval/pdf cover the non-delta lobes only.
 bool isDeltaMaterial(const BsdfParams& m);
+
+/// The Lambertian lobe (MaterialType::Diffuse) from the cosines of wo and wi with the shading
+/// normal, all it depends on: callers that have them skip the change of frame. Two-sided like
+/// every BSDF here (it reflects into wo's hemisphere); evalBsdf and pdfBsdfW use the same two.
+inline Rgb lambertEval(const Rgb& albedo, float cosO, float cosI) {
+    if (cosO == 0.f) return Rgb(0.f);
+    return cosI * (cosO < 0.f ? -1.f : 1.f) > 0.f ? albedo * kInvPi : Rgb(0.f);
+}
+inline float lambertPdfW(float cosO, float cosI) {
+    if (cosO == 0.f) return 0.f;
+    return cosineHemispherePdfW(cosI * (cosO < 0.f ? -1.f : 1.f));
+}
 
 /// f(wo, wi) without the cosine factor, non-delta lobes only. For refraction `mode` chooses between
 /// the BSDF (radiance: the 1/η² compression) and its adjoint (importance), Veach 1997, §5.2.

@@ -1,5 +1,7 @@
 #include "scene/scene.h"
 
+#include <algorithm>
+
 #include "geometry/instances.h"
 #include "geometry/intersect.h"
 #include "materials/bsdf.h"
@@ -8,12 +10,15 @@ namespace tessera {
 
 void Scene::finalize() {
     lights_.build(geometry, materials, pointLights, spotLights, directionalLights, environment ? &*environment : nullptr);
+    hasVolumes_ = std::any_of(materials.begin(), materials.end(),
+                              [](const Material& m) { return !m.bsdf.thinWalled && !isBlack(m.bsdf.attenuationCoeff); });
 }
 
 Scene::Scene(Scene&& o) noexcept
     : geometry(std::move(o.geometry)), materials(std::move(o.materials)), images(std::move(o.images)), pointLights(std::move(o.pointLights)),
       spotLights(std::move(o.spotLights)), directionalLights(std::move(o.directionalLights)), environment(std::move(o.environment)), camera(std::move(o.camera)), cameras(std::move(o.cameras)),
-      settings(std::move(o.settings)), sourcePath(std::move(o.sourcePath)), lights_(std::move(o.lights_)) {
+      settings(std::move(o.settings)), sourcePath(std::move(o.sourcePath)), lights_(std::move(o.lights_)),
+      hasVolumes_(o.hasVolumes_) {
     lights_.rebind(geometry);
 }
 
@@ -30,6 +35,7 @@ Scene& Scene::operator=(Scene&& o) noexcept {
     settings = std::move(o.settings);
     sourcePath = std::move(o.sourcePath);
     lights_ = std::move(o.lights_);
+    hasVolumes_ = o.hasVolumes_;
     lights_.rebind(geometry);
     return *this;
 }

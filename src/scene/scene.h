@@ -72,6 +72,10 @@ public:
     /// Builds the light set; call after geometry and materials are final (again after changing lights).
     void finalize();
     const LightSet& lights() const { return lights_; }
+    /// True when some material is an absorbing volume (KHR_materials_volume with a finite
+    /// attenuation distance, integrators/volume.h): without one no segment is ever attenuated, and
+    /// the bidirectional connections skip the per-segment test. Set by finalize().
+    bool hasVolumes() const { return hasVolumes_; }
 
     /// Fills the surface interaction of `hit` for `ray`. The point is recomputed from the primitive
     /// (barycentric interpolation / reprojection onto the sphere), which is far more accurate than
@@ -84,6 +88,7 @@ public:
 
 private:
     LightSet lights_;
+    bool hasVolumes_ = false;
 };
 
 }  // namespace tessera
