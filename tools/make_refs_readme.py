@@ -42,9 +42,16 @@ Regenerate (niced, resumable, hours of 2-core time for all): `python3 tools/make
 
 # What the numbers alone do not say (read from the methods' renders; tools/make_refs_stats.py).
 NOTES = {
-    "furnace": "bdpt and ptnee agree with each other to 0.003%; both sit 0.01–0.06% above the analytic "
-               "value with Z up to 2.9 and only 97.7% of pixel channels within 3σ (8 and 16 spp per render: "
-               "the per-pixel σ of 8 renders underestimates these long, Russian-roulette-ended paths)",
+    "furnace": "bdpt and ptnee sit 0.01–0.06% above the analytic value (Z up to 2.9; the channels share every "
+               "path, so that is one event per method): chance in these 16 renders, not a bias. They reproduce bit "
+               "for bit, and the same commands with other seeds do not show it: ptnee 100 renders (seeds 7000-7099) "
+               "-0.002%/-0.0004%/-0.010% ± 0.001%/0.0003%/0.006%, bdpt 40 renders (8000-8039) -0.004%/-0.001%/-0.012% "
+               "± 0.006%/0.002%/0.015%; at 64x64, 100 renders of 1M paths each of pt and ptnee (both samplers) and "
+               "50 of bdpt lie within 1.5 standard errors (≤ 0.007%) of it. ptnee's σ is right (the spread of its 100 "
+               "renders' means is what its pixels' σ predicts, within 6%); bdpt's pixels share its light paths' "
+               "splats, so their σ understates its mean's by 1.3x: its Z is at most 1.8, not 2.3. 97.7% of pixel channels within 3σ is what 8 renders "
+               "give with any seeds (7000-7007: 97.7%): a σ from 8 renders has 7 degrees of freedom, which leaves 2% "
+               "of even normal values outside 3σ (Student's t)",
     "cornell-box-specular": "only 90.5% of pixel channels within 3σ (99.2% of bins): ptnee reaches the caustics "
                             "under the glass and mirror spheres only by BSDF samples that hit the light, so its "
                             "pixels there are heavy-tailed and their σ from 8 renders too small",
