@@ -40,6 +40,19 @@ float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVerte
     return convertDensity(pdfW, cur, next);
 }
 
+namespace {
+
+/// The segment from `from` to `to` as the densities use it: squared length, length and unit
+/// direction (one home for the arithmetic the walk caches in PathVertex::toPrev).
+void segmentBetween(const Vec3f& from, const Vec3f& to, float& dist2, float& len, Vec3f& dir) {
+    Vec3f d = to - from;
+    dist2 = glm::dot(d, d);
+    len = std::sqrt(dist2);
+    dir = d / len;
+}
+
+}  // namespace
+
 void pdfBothWaysA(const RenderContext& ctx, const PathVertex& pred, const PathVertex& cur, const PathVertex& b, float& pdfToBA,
                   float& pdfToPredA) {
     if (cur.type != VertexType::Surface) {
@@ -65,9 +78,7 @@ void pdfBothWaysA(const RenderContext& ctx, const SurfaceBsdf& bsdfAtCur, const 
         lenPred = cur.toPrevLen;
         toPred = cur.toPrev;
     } else {
-        dist2Pred = glm::dot(da, da);
-        lenPred = std::sqrt(dist2Pred);
-        toPred = da / lenPred;
+        segmentBetween(cur.p, pred.p, dist2Pred, lenPred, toPred);
     }
     if (pred.atInfinity || b.atInfinity || !(dist2Pred > 0.f) || !(dist2B > 0.f)) {
         pdfToBA = pdfNextA(ctx, &pred, cur, b);
@@ -223,19 +234,14 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
             v.p = ray.o + (2.f * scene.lights().sceneRadius() + glm::length(ray.o - scene.lights().sceneCenter())) * v.ng;
             v.lightIndex = scene.lights().environmentIndex();
         }
+        // The segment back to the predecessor, once for every density towards it (PathVertex::toPrev).
+        if (const PathVertex& pred = out[n - 1]; !pred.atInfinity && !v.atInfinity) {
+            segmentBetween(v.p, pred.p, v.toPrevDist2, v.toPrevLen, v.toPrev);
+            if (v.toPrevDist2 > 0.f) v.prevP = pred.p;
+            else v.toPrevLen = 0.f;
+        }
         // The segment just traced: Beer–Lambert inside a volume (the same rule as the connections).
         // Roulette keeps looking at the BSDF weights only (as in pt).
-        // The segment back to the predecessor, once for every density towards it (PathVertex::toPrev),
-        // with pdfBothWaysA's arithmetic.
-        if (const PathVertex& pred = out[n - 1]; !pred.atInfinity && !v.atInfinity) {
-            Vec3f d = pred.p - v.p;
-            if (float dist2 = glm::dot(d, d); dist2 > 0.f) {
-                v.prevP = pred.p;
-                v.toPrevDist2 = dist2;
-                v.toPrevLen = std::sqrt(dist2);
-                v.toPrev = d / v.toPrevLen;
-            }
-        }
         bool attenuates;
         Rgb T = segmentTransmittance(ctx, out[n - 1], v, attenuates);
         if (attenuates) beta *= T;
