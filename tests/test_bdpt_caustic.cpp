@@ -21,11 +21,6 @@ using namespace tessera;
 
 namespace {
 
-Scene loadScene(const std::string& relative) {
-    std::vector<std::string> warnings;
-    return loadGltfScene(test::sourcePath(relative), warnings);
-}
-
 /// The vertex x0 of a camera sub-path that ended on an emitter, as a light vertex.
 PathVertex asLightVertex(const PathVertex& e) {
     PathVertex v = e;
@@ -173,9 +168,9 @@ int checkPathsToTheLight(const Scene& scene, int wanted, uint64_t seed) {
 
 TEST(BdptCaustic, WeightsOfPathsThroughMirrorsToASmallSphereLightSumToOne) {
     // ring-caustic's light: radius 0.06 at ~4 from the ring, a cone of ~0.9° (the series branch).
-    Scene ring = loadScene("scenes/ring-caustic/ring-caustic.gltf");
+    Scene ring = test::loadSourceScene("scenes/ring-caustic/ring-caustic.gltf");
     EXPECT_GE(checkPathsToTheLight(ring, 40, 5), 40);
-    Scene sds = loadScene("scenes/sds-caustic/sds-caustic.gltf");
+    Scene sds = test::loadSourceScene("scenes/sds-caustic/sds-caustic.gltf");
     EXPECT_GE(checkPathsToTheLight(sds, 40, 6), 40);
 }
 
@@ -212,7 +207,7 @@ double relMse(const std::vector<double>& x, const std::vector<double>& ref, cons
 // Region: floor pixels that a 16-spp lt render (seed 1) finds far brighter than the median; error
 // against a 512-spp lt render (seed 2), bdpt (seed 3) and lt (seed 4) at equal spp.
 TEST(BdptCaustic, RingCausticErrorIsThatOfLightTracing) {
-    Scene scene = loadScene("scenes/ring-caustic/ring-caustic.gltf");
+    Scene scene = test::loadSourceScene("scenes/ring-caustic/ring-caustic.gltf");
     const int w = 96, h = 72, spp = 16;
     std::vector<double> sel = luminance(scene, "lt", w, h, 16, 1);
     std::vector<double> sorted = sel;
@@ -278,7 +273,7 @@ void expectConvergesAsOneOverN(Scene& scene, const char* path, int w, int h, int
 }
 
 TEST(BdptCaustic, RingCausticErrorFallsAsOneOverN) {
-    Scene scene = loadScene("scenes/ring-caustic/ring-caustic.gltf");
+    Scene scene = test::loadSourceScene("scenes/ring-caustic/ring-caustic.gltf");
     expectConvergesAsOneOverN(scene, "ring-caustic", 64, 48, 4, 7);
 }
 // sds-caustic's SDS caustic (light -> glass -> glass -> floor -> mirror -> eye) has one strategy,
@@ -287,7 +282,7 @@ TEST(BdptCaustic, RingCausticErrorFallsAsOneOverN) {
 // such events and no error estimate is stable, so the light is made 4x larger at equal power
 // (16x the events at 1/16 the value): the same paths and strategies, measurable in seconds.
 TEST(BdptCaustic, SdsCausticErrorFallsAsOneOverN) {
-    Scene scene = loadScene("scenes/sds-caustic/sds-caustic.gltf");
+    Scene scene = test::loadSourceScene("scenes/sds-caustic/sds-caustic.gltf");
     ASSERT_EQ(test::enlargeSphereLight(scene, 4.f), 1);
     expectConvergesAsOneOverN(scene, "sds-caustic", 32, 24, 32, 7);
 }

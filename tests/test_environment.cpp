@@ -27,8 +27,6 @@ using namespace tessera;
 
 namespace {
 
-const char* const kIntegrators[] = {"pt", "ptnee", "lt", "bdpt"};
-
 CameraDesc lookAtCamera(Vec3f eye, Vec3f target, float yfov, Vec3f up = Vec3f(0.f, 1.f, 0.f)) {
     CameraDesc d;
     d.cameraToWorld = glm::inverse(glm::lookAt(eye, target, up));
@@ -76,7 +74,7 @@ TEST(EnvironmentFurnace, ConvexLambertianObjectUnderAConstantEnvironment) {
         // Filling the frame: at distance 3 the sphere subtends 19.5° (19.4° for the mesh's flat
         // facets); the frame's half-diagonal is 16°.
         scene.camera = lookAtCamera(Vec3f(0.3f, 0.4f, 3.f), Vec3f(0.f), 0.4f);
-        for (const char* name : kIntegrators) {
+        for (const char* name : test::kIntegrators) {
             // Light tracing lands only ~1 in 5 of its paths in this frame and splats each with a
             // varying weight: 0.5% would take 16× its 2 M paths, so it is held to 1% (and 3 SE).
             bool lt = std::string(name) == "lt";
@@ -85,7 +83,7 @@ TEST(EnvironmentFurnace, ConvexLambertianObjectUnderAConstantEnvironment) {
         }
         // Looking away from it: only the environment.
         scene.camera = lookAtCamera(Vec3f(0.f, 0.f, 3.f), Vec3f(0.f, 0.5f, 6.f), 0.8f);
-        for (const char* name : kIntegrators) {
+        for (const char* name : test::kIntegrators) {
             Film film = render(scene, name, 16, 16, 4, 12);
             test::expectImageMean(film, L, 1e-5, std::string(name) + " background");
         }
@@ -121,7 +119,7 @@ TEST(EnvironmentFurnace, DiffusePlaneUnderAnHdriOfKnownIntegral) {
     for (int x = 0; x < w; ++x) mean += g(x) / float(w);
     const Rgb albedo(0.7f, 0.5f, 0.3f);
     Scene scene = planeUnderEnvironment(albedo, image.get());
-    for (const char* name : kIntegrators) {
+    for (const char* name : test::kIntegrators) {
         bool lt = std::string(name) == "lt";
         // pt gets 1024 spp: its standard error (0.2%) then sits well inside the 0.5% bound.
         Film film = render(scene, name, 16, 16, lt ? 4096 : name == std::string("bdpt") ? 64 : name == std::string("pt") ? 1024 : 256, 21);

@@ -13,12 +13,23 @@
 #include "render/film.h"
 #include "render/renderer.h"
 #include "scene/assets.h"
+#include "scene/gltf_loader.h"
 #include "scene/scene.h"
 #include "texture/image.h"
 
 namespace tessera::test {
 
 inline std::string sourcePath(const std::string& relative) { return std::string(TESSERA_SOURCE_DIR) + "/" + relative; }
+
+/// The four estimators every scene-level agreement test runs (`bdpt-balance` is `bdpt` with
+/// another MIS heuristic).
+inline constexpr const char* kIntegrators[] = {"pt", "ptnee", "lt", "bdpt"};
+
+/// A scene of the source tree (e.g. "scenes/cornell-box/cornell-box.gltf"), its warnings dropped.
+inline Scene loadSourceScene(const std::string& relative) {
+    std::vector<std::string> warnings;
+    return loadGltfScene(sourcePath(relative), warnings);
+}
 
 /// The folders the tests take large meshes from, in order: each entry of TESSERA_ASSETS
 /// (':'-separated) and the fetch cache that tools/fetch_assets.sh fills (defaultAssetRoots), then

@@ -15,8 +15,6 @@ using namespace tessera;
 
 namespace {
 
-const char* const kIntegrators[] = {"pt", "ptnee", "lt", "bdpt"};
-
 Film renderWith(const Scene& scene, const char* integratorName, int w, int h, int spp, uint64_t seed, int threads = 0,
                 const Integrator* integrator = nullptr, int maxDepth = -1) {
     auto accel = createAccel("embree", scene.geometry);
@@ -50,7 +48,7 @@ TEST(IntegratorFurnace, EveryIntegratorGivesLeOverOneMinusAlbedo) {
     Rgb albedo(0.5f, 0.3f, 0.7f), Le(1.f, 2.f, 0.5f);
     for (bool asMesh : {false, true}) {
         Scene scene = test::closedSphere(albedo, Le, asMesh);
-        for (const char* name : kIntegrators) {
+        for (const char* name : test::kIntegrators) {
             int spp = std::string(name) == "bdpt" ? 24 : std::string(name) == "lt" ? 256 : 64;
             Film film = renderWith(scene, name, 32, 32, spp, 99);
             expectImageMean(film, Le / (Rgb(1.f) - albedo), name, 0.01);
@@ -68,7 +66,7 @@ TEST(IntegratorFurnace, PointLightAtTheCentreOfAClosedSphere) {
     Vec3f center(0.1f, -0.2f, 0.05f);  // behind the camera (which looks down −z from the origin)
     Scene scene = test::closedSphere(albedo, Rgb(0.f), false, {PointLightDesc{center, I}});
     Rgb expected = albedo * I / (kPi * (Rgb(1.f) - albedo));
-    for (const char* name : kIntegrators) {
+    for (const char* name : test::kIntegrators) {
         int spp = std::string(name) == "bdpt" ? 24 : 64;
         Film film = renderWith(scene, name, 32, 32, spp, 5);
         if (std::string(name) == "pt") {

@@ -61,7 +61,6 @@ const ShippedScene kScenes[] = {
     {"hdri-sun", "scenes/hdri-spheres/hdri-sun.gltf", false, 4, false, "pmndrs-hdri/sky.exr"},
 };
 
-const char* const kIntegrators[] = {"pt", "ptnee", "lt", "bdpt"};
 
 /// Asset folders: the tests' (TESSERA_ASSETS, fetch cache, <source>/../shared/data).
 SceneLoadOptions loadOptions() {
@@ -242,7 +241,7 @@ TEST_P(ShippedSceneTest, EveryIntegratorRendersFourSppWithoutNaN) {
     Scene scene = loadShipped(s);
     auto accel = createAccel("embree", scene.geometry);
     double ptneeSum = 0;
-    for (const char* name : kIntegrators) {
+    for (const char* name : test::kIntegrators) {
         uint64_t nonFinite = 0;
         Film film = render(scene, *accel, name, 32, 24, 4, 11, &nonFinite);
         EXPECT_EQ(nonFinite, 0u) << s.name << " " << name;

@@ -20,11 +20,6 @@ using namespace tessera;
 
 namespace {
 
-Scene loadScene(const std::string& relative) {
-    std::vector<std::string> warnings;
-    return loadGltfScene(test::sourcePath(relative), warnings);
-}
-
 Film renderFilm(const Scene& scene, const Integrator& integrator, int w, int h, int spp, uint64_t seed) {
     auto accel = createAccel("embree", scene.geometry);
     test::TestRender r = test::renderScene(scene, *accel, integrator, w, h, RenderOptions{.spp = spp, .seed = seed});
@@ -72,7 +67,7 @@ size_t count(const std::vector<bool>& mask) {
 // lt is far brighter than ptnee (seeds 1, 2); lt (seed 3), bdpt (4), ptnee (5) and pt (6) are then
 // measured there.
 TEST(Stability, PointLightSpecularCausticsComeOnlyFromLightTracing) {
-    Scene scene = loadScene("scenes/point-light-specular/point-light-specular.gltf");
+    Scene scene = test::loadSourceScene("scenes/point-light-specular/point-light-specular.gltf");
     const int w = 160, h = 120;
     std::vector<double> ltSel = renderLuminance(scene, "lt", w, h, 16, 1);
     std::vector<double> neeSel = renderLuminance(scene, "ptnee", w, h, 16, 2);
@@ -105,7 +100,7 @@ TEST(Stability, PointLightSpecularCausticsComeOnlyFromLightTracing) {
 // fail by chance. The light is made 4x larger at equal power (test::enlargeSphereLight: 16x the
 // events at 1/16 their value, the same paths and strategies).
 TEST(Stability, SdsCausticComesOnlyFromBdptsUnidirectionalStrategies) {
-    Scene scene = loadScene("scenes/sds-caustic/sds-caustic.gltf");
+    Scene scene = test::loadSourceScene("scenes/sds-caustic/sds-caustic.gltf");
     ASSERT_EQ(test::enlargeSphereLight(scene, 4.f), 1);
     const int w = 160, h = 120;
     BdptSettings s0Only;
@@ -135,7 +130,7 @@ TEST(Stability, SdsCausticComesOnlyFromBdptsUnidirectionalStrategies) {
     double eAll = sumOver(all, sds), eS0 = sumOver(s0, sds);
     double eNee = sumOver(renderLuminance(scene, "ptnee", w, h, 32, 3), sds);
     // The shipped light: the enlarged one is in the camera's view.
-    std::vector<double> lt = renderLuminance(loadScene("scenes/sds-caustic/sds-caustic.gltf"), "lt", w, h, 8, 4);
+    std::vector<double> lt = renderLuminance(test::loadSourceScene("scenes/sds-caustic/sds-caustic.gltf"), "lt", w, h, 8, 4);
     std::cout << "SDS pixels " << count(sds) << ", energy there: bdpt " << eAll << " (s = 0: " << eS0
               << ", connections " << eAll - eS0 << "), ptnee " << eNee << "; lt whole image " << sum(lt)
               << "; bdpt whole image " << sum(all) << "\n";
@@ -178,7 +173,7 @@ TEST(Stability, TinyLightBsdfSamplingErrorGrowsWithOneOverAreaNextEventEstimatio
     const char* names[] = {"pt", "ptnee"};
     auto nee = createIntegrator("ptnee");
     for (int k = 0; k < 3; ++k) {
-        Scene scene = loadScene(scenes[k]);
+        Scene scene = test::loadSourceScene(scenes[k]);
         std::vector<double> ref = rgb(renderFilm(scene, *nee, w, h, 512, 100 + k));
         for (int m = 0; m < 2; ++m) {
             auto integrator = createIntegrator(names[m]);
@@ -202,7 +197,7 @@ TEST(Stability, TinyLightBsdfSamplingErrorGrowsWithOneOverAreaNextEventEstimatio
 // 80x60, 16 spp: relative variance (sum over pixels of Var / sum of mean^2, Var from two seeds)
 // pt 1.6, ptnee 0.14, bdpt 0.038. Asserted with margin: pt >= 5x ptnee >= 2x bdpt.
 TEST(Stability, DoorAjarBdptHasTheLowestVariancePerSample) {
-    Scene scene = loadScene("scenes/door-ajar/door-ajar.gltf");
+    Scene scene = test::loadSourceScene("scenes/door-ajar/door-ajar.gltf");
     const int w = 80, h = 60, spp = 16;
     auto relVar = [&](const char* name, uint64_t seed) {
         auto integrator = createIntegrator(name);
@@ -233,7 +228,7 @@ TEST(Stability, DoorAjarBdptHasTheLowestVariancePerSample) {
 // lt's rare large samples, which is why the ratios are far below the study's work ratios);
 // asserted with margin: pt > 2x, lt > 1.5x ptnee, bdpt < 2x ptnee.
 TEST(Stability, VeachMisOnlyMultipleImportanceSamplingHandlesEveryPlate) {
-    Scene scene = loadScene("scenes/veach-mis/veach-mis.gltf");
+    Scene scene = test::loadSourceScene("scenes/veach-mis/veach-mis.gltf");
     const int w = 64, h = 48, spp = 16;
     auto relVar = [&](const char* name, uint64_t seed) {
         auto integrator = createIntegrator(name);
@@ -262,7 +257,7 @@ TEST(Stability, VeachMisOnlyMultipleImportanceSamplingHandlesEveryPlate) {
 // closed sphere land on few pixels each). Pinned: each integrator's image mean per channel within
 // 4 standard errors (from 8 independent renders) and 2% of the analytic value (lt: 10%).
 TEST(Stability, FurnaceEveryIntegratorConvergesToTheAnalyticValue) {
-    Scene scene = loadScene("scenes/furnace/furnace.gltf");
+    Scene scene = test::loadSourceScene("scenes/furnace/furnace.gltf");
     const double expected[3] = {1.0 / (1.0 - 0.5), 1.0 / (1.0 - 0.3), 1.0 / (1.0 - 0.7)};
     // 8 runs: a standard error from 4 (3 degrees of freedom) is too unsteady for a 4-sigma bound.
     const int w = 16, h = 16, spp = 8, runs = 8;

@@ -147,9 +147,8 @@ struct LoadedScene {
     std::unique_ptr<Accel> accel;
 };
 
-LoadedScene loadScene(const std::string& relative) {
-    std::vector<std::string> warnings;
-    LoadedScene s{loadGltfScene(test::sourcePath(relative), warnings), nullptr};
+LoadedScene loadWithEmbree(const std::string& relative) {
+    LoadedScene s{test::loadSourceScene(relative), nullptr};
     s.accel = createAccel("embree", s.scene.geometry);
     return s;
 }
@@ -167,7 +166,7 @@ PreviewSettings smallPreview(int w, int h, uint32_t sppLimit) {
 }  // namespace
 
 TEST(PreviewSession, StillPassesEqualABatchRenderBitForBit) {
-    LoadedScene s = loadScene("scenes/sphere-cornell/sphere-cornell.gltf");
+    LoadedScene s = loadWithEmbree("scenes/sphere-cornell/sphere-cornell.gltf");
     const int W = 48, H = 36;
     const uint32_t spp = 6;
     for (const char* integrator : {"ptnee", "bdpt"}) {
@@ -197,7 +196,7 @@ TEST(PreviewSession, StillPassesEqualABatchRenderBitForBit) {
 }
 
 TEST(PreviewSession, ACameraChangeAbandonsThePassAndRestartsAccumulation) {
-    LoadedScene s = loadScene("scenes/sphere-cornell/sphere-cornell.gltf");
+    LoadedScene s = loadWithEmbree("scenes/sphere-cornell/sphere-cornell.gltf");
     // Big enough that a pass (1 spp) takes far longer than one 32x32 tile.
     PreviewSession session(s.scene, *s.accel, smallPreview(320, 240, 0), *s.scene.camera, "ptnee");
     ASSERT_TRUE(session.waitForSpp(1, 60.0));
@@ -222,7 +221,7 @@ TEST(PreviewSession, ACameraChangeAbandonsThePassAndRestartsAccumulation) {
 }
 
 TEST(PreviewSession, AMovingCameraGetsReducedFramesThenRefinesAtFullResolution) {
-    LoadedScene s = loadScene("scenes/cornell-box/cornell-box.gltf");
+    LoadedScene s = loadWithEmbree("scenes/cornell-box/cornell-box.gltf");
     PreviewSession session(s.scene, *s.accel, smallPreview(320, 240, 2), *s.scene.camera, "ptnee");
     ASSERT_TRUE(session.waitForSpp(1, 60.0));
     FlyCamera fly(*s.scene.camera, 1.f);
@@ -255,7 +254,7 @@ TEST(PreviewSession, AMovingCameraGetsReducedFramesThenRefinesAtFullResolution) 
 TEST(PreviewSession, SpeedFollowsWhatTheCameraSees) {
     // The sphere Cornell box's walls are spheres of radius 1e4: the bounds would give a speed in
     // the thousands; the median hit distance gives a room-sized one.
-    LoadedScene s = loadScene("scenes/sphere-cornell/sphere-cornell.gltf");
+    LoadedScene s = loadWithEmbree("scenes/sphere-cornell/sphere-cornell.gltf");
     float speed = speedForView(*s.accel, *s.scene.camera);
     Bounds3f b = s.accel->bounds();
     EXPECT_GT(speed, 0.f);

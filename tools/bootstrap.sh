@@ -3,7 +3,10 @@
 #
 # Sourced (tools/render.sh, tools/test.sh): installs the `build` group when anything in it is
 # missing, then configures CMake (Release) once and builds incrementally into build/. It defines
-# TESSERA_ROOT and TESSERA_BUILD.
+# TESSERA_ROOT and TESSERA_BUILD. With TESSERA_SANITIZE=asan (ASan+UBSan) or tsan it builds with those
+# sanitizers instead (RelWithDebInfo, in build-asan/ or build-tsan/) and exports the sanitizers'
+# run-time options, so `TESSERA_SANITIZE=asan tools/test.sh` is the suite under ASan+UBSan
+# (tools/sanitize.sh, .ci/run).
 # Run (everything else that needs packages: .ci/run, tools/study, tools/make_refs.py, tools/fuzz.sh,
 # tools/fresh_check.sh):
 #   tools/bootstrap.sh --install GROUP...   install what is missing of those groups; build nothing
@@ -15,7 +18,20 @@
 set -euo pipefail
 
 TESSERA_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-TESSERA_BUILD="${TESSERA_BUILD:-$TESSERA_ROOT/build}"
+case "${TESSERA_SANITIZE:-}" in
+  "") tessera_sanitizers="" ;;
+  asan) tessera_sanitizers="address,undefined"
+    # Leaks are errors too. UBSan stops at the first report so that a finding fails the test.
+    export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}"
+    export UBSAN_OPTIONS="${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}" ;;
+  tsan) tessera_sanitizers="thread"
+    # history_size=7: the longest per-thread access history, so that the earlier access of a report
+    # keeps its stack (a suppression can only match frames TSan restored). Embree's and OIIO's own
+    # threads are suppressed in tools/tsan.supp, with reasons.
+    export TSAN_OPTIONS="${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1:history_size=7:suppressions=$TESSERA_ROOT/tools/tsan.supp}" ;;
+  *) echo "tools/bootstrap.sh: TESSERA_SANITIZE must be asan or tsan, not '$TESSERA_SANITIZE'" >&2; exit 2 ;;
+esac
+TESSERA_BUILD="${TESSERA_BUILD:-$TESSERA_ROOT/build${TESSERA_SANITIZE:+-$TESSERA_SANITIZE}}"
 
 # build: the renderer, its library and the test suite (GoogleTest), configured by CMake. libsdl2-dev
 # is `tessera view`'s window; xvfb, xdotool and x11-apps (xwd) let the suite open that window on a
@@ -86,7 +102,14 @@ tessera_build() {
   local jobs
   jobs="$(nproc 2>/dev/null || echo 2)"
   if [ ! -f "$TESSERA_BUILD/CMakeCache.txt" ]; then
-    cmake -S "$TESSERA_ROOT" -B "$TESSERA_BUILD" -DCMAKE_BUILD_TYPE=Release >/dev/null
+    # Unity batches (CMake's, 8 sources each) compile each batch's shared headers and inline code
+    # once: the fresh builds of a clean clone that the README's commands and CI make take less time.
+    if [ -n "$tessera_sanitizers" ]; then
+      cmake -S "$TESSERA_ROOT" -B "$TESSERA_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_UNITY_BUILD=ON \
+        -DTESSERA_SANITIZE="$tessera_sanitizers" >/dev/null
+    else
+      cmake -S "$TESSERA_ROOT" -B "$TESSERA_BUILD" -DCMAKE_BUILD_TYPE=Release -DCMAKE_UNITY_BUILD=ON >/dev/null
+    fi
   fi
   cmake --build "$TESSERA_BUILD" -j "$jobs" -- --no-print-directory 2>&1 | { grep -vE '^\[ *[0-9]+%\]|^-- ' || true; }
   test "${PIPESTATUS[0]}" -eq 0

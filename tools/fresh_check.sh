@@ -7,9 +7,11 @@
 #     tools/test.sh       (installs what is missing, builds, fetches the test meshes, runs every test)
 # Prints the time of each step and fails loudly naming the step that broke (exit 1).
 #
-#   tools/fresh_check.sh [--keep] [--no-cache]
+#   tools/fresh_check.sh [--keep] [--no-cache] [--study]
 #     --keep       keep the root file system (its path is printed) instead of deleting it
 #     --no-cache   bootstrap a new root file system even when today's is cached
+#     --study      then, as the README says for the study: tools/bootstrap.sh --install study and
+#                  tools/study --quick (CI's smoke test of the study, on this Release build)
 #
 # Only the bootstrap tarball is cached (one a day, in $TESSERA_CACHE or ~/.cache/tessera/fresh-check):
 # it holds nothing of the project. The project's packages, build and test meshes are never cached.
@@ -18,12 +20,13 @@
 # Uncommitted changes are NOT checked: commit first (a warning says so).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-keep=0; use_cache=1
+keep=0; use_cache=1; study=0
 for a in "$@"; do
   case "$a" in
     --keep) keep=1 ;;
     --no-cache) use_cache=0 ;;
-    *) echo "usage: tools/fresh_check.sh [--keep] [--no-cache]" >&2; exit 2 ;;
+    --study) study=1 ;;
+    *) echo "usage: tools/fresh_check.sh [--keep] [--no-cache] [--study]" >&2; exit 2 ;;
   esac
 done
 [ "$(id -u)" -eq 0 ] || { echo "fresh_check: needs root (chroot and mounts)" >&2; exit 2; }
@@ -121,7 +124,8 @@ in_fresh 'tools/test.sh 2>&1 | tee /root/test.log; exit ${PIPESTATUS[0]}'
 # Every test runs on a fresh machine: a skip here means an install or fetch step is missing (the
 # test meshes come from the npm registry; when it cannot be reached this fails, saying so).
 # The one exception: farm_local_slurm needs CI set (then tools/test.sh installs slurm-wlm and the
-# test must run; .ci/run's own tools/test.sh step does that on the host), and the fresh root has no CI.
+# test must run; .ci/run's own tools/test.sh step, under ASan, does that on the host), and the fresh
+# root has no CI.
 skipped="$(grep -E '\*\*\*Skipped|Skipped  *[0-9.]+ sec' "$rootfs/root/test.log" | grep -cv 'farm_local_slurm' || true)"
 summary="$(grep -E 'tests passed|tests failed' "$rootfs/root/test.log" | tail -n 1)"
 echo "fresh_check: $summary; skipped: $skipped"
@@ -131,6 +135,12 @@ if [ "$skipped" -ne 0 ]; then
   exit 1
 fi
 end
+
+if [ $study -eq 1 ]; then
+  begin "study smoke test: tools/study --quick"
+  in_fresh 'tools/bootstrap.sh --install study && tools/study --quick'
+  end
+fi
 
 echo ""
 echo "fresh_check: passed in $((SECONDS - t_start)) s on $(nproc) cores ($(git -C "$root" rev-parse --short HEAD), $(date -u +%Y-%m-%d))"

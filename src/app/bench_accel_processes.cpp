@@ -84,7 +84,7 @@ nlohmann::json toJson(const Summary& s) {
     return {{"median", s.median}, {"min", s.min}, {"max", s.max}, {"spread", s.spread}, {"values", s.values}};
 }
 
-std::string describe(const Summary& s, int precision, const char* unit) {
+std::string describeSummary(const Summary& s, int precision, const char* unit) {
     std::ostringstream o;
     o << std::fixed << std::setprecision(precision) << s.median << unit << " [" << s.min << "–" << s.max << ", "
       << std::setprecision(1) << 100.0 * s.spread << "%]";
@@ -142,25 +142,25 @@ int runBenchProcesses(const std::vector<std::string>& childArgs, int processes, 
             nlohmann::json out = {{"buildSeconds", toJson(summarise(build))},
                                   {"bytesPerPrimitive", it.value()["bytesPerPrimitive"]}};
             std::ostringstream line;
-            line << "  " << std::left << std::setw(8) << name << " build " << describe(summarise(build), 3, " s");
+            line << "  " << std::left << std::setw(8) << name << " build " << describeSummary(summarise(build), 3, " s");
             auto track = [&](const Summary& s, const std::string& what) {
                 if (s.spread > worstSpread) worstSpread = s.spread, worstWhat = in["input"].get<std::string>() + ", " + name + ", " + what;
             };
             if (!buildRatio.empty() && name != "embree") {
                 Summary s = summarise(buildRatio);
                 out["buildRatioToEmbree"] = toJson(s);
-                line << " = " << describe(s, 2, "x") << " embree's";
+                line << " = " << describeSummary(s, 2, "x") << " embree's";
                 track(s, "build ratio");
             }
             for (const char* kind : {"primary", "diffuse", "shadow"}) {
                 if (!mrays.count(kind)) continue;
                 Summary s = summarise(mrays[kind]);
                 out["mraysPerSecond"][kind] = toJson(s);
-                line << "\n           " << std::setw(8) << kind << describe(s, 2, " Mrays/s");
+                line << "\n           " << std::setw(8) << kind << describeSummary(s, 2, " Mrays/s");
                 if (ratio.count(kind) && name != "embree") {
                     Summary r = summarise(ratio[kind]);
                     out["ratioToEmbree"][kind] = toJson(r);
-                    line << "  ratio " << describe(r, 3, "x");
+                    line << "  ratio " << describeSummary(r, 3, "x");
                     track(r, std::string(kind) + " ratio");
                 }
             }

@@ -4,6 +4,8 @@
 /// called after parsing; runners return the process exit code.
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <string>
+#include <vector>
 
 namespace tessera::app {
 
@@ -18,6 +20,8 @@ Runner addMergeCommand(CLI::App& app);
 Runner addFarmCommand(CLI::App& app);
 Runner addBatchCommand(CLI::App& app);
 
+/// "a, b, c": the names an option accepts, for its help text.
+std::string commaSeparated(const std::vector<std::string>& names);
 /// Prints "tessera: error: MESSAGE" on one line to stderr.
 void printError(const std::string& message);
 void printWarning(const std::string& message);

@@ -104,13 +104,14 @@ int runRender(const RenderArgs& a) {
     return r.stats.interrupted ? 130 : 0;
 }
 
-std::string joined(const std::vector<std::string>& v) {
-    std::string s;
-    for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
-    return s;
-}
 
 }  // namespace
+
+std::string commaSeparated(const std::vector<std::string>& names) {
+    std::string s;
+    for (const std::string& x : names) s += (s.empty() ? "" : ", ") + x;
+    return s;
+}
 
 void printError(const std::string& message) { std::cerr << "tessera: error: " << message << std::endl; }
 void printWarning(const std::string& message) { std::cerr << "tessera: warning: " << message << std::endl; }
@@ -129,8 +130,8 @@ Runner addRenderCommand(CLI::App& app) {
     cmd->add_option("--seed", a->seed, "random seed (default: the scene's, else 0)")->check(CLI::NonNegativeNumber);
     addSamplerOption(*cmd, *a);
     cmd->add_option("--resolution", a->resolution, "image size WxH, e.g. 640x480 (default: the scene's)");
-    cmd->add_option("--integrator", a->integrator, "light transport algorithm: " + joined(integratorNames()) + " (default: ptnee)");
-    cmd->add_option("--accel", a->accel, "acceleration structure: " + joined(accelNames()) + " (default: embree)");
+    cmd->add_option("--integrator", a->integrator, "light transport algorithm: " + commaSeparated(integratorNames()) + " (default: ptnee)");
+    cmd->add_option("--accel", a->accel, "acceleration structure: " + commaSeparated(accelNames()) + " (default: embree)");
     cmd->add_option("--max-depth", a->maxDepth, "maximum number of bounces, -1 = unlimited (Russian roulette ends paths)")
         ->check(CLI::Range(-1, 1 << 20));
     cmd->add_option("--bdpt-strategies", a->bdptStrategies,

@@ -373,12 +373,6 @@ int runView(const ViewArgs& a) {
     return viewer.run();
 }
 
-std::string joined(const std::vector<std::string>& v) {
-    std::string s;
-    for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
-    return s;
-}
-
 }  // namespace
 
 Runner addViewCommand(CLI::App& app) {
@@ -391,8 +385,8 @@ Runner addViewCommand(CLI::App& app) {
     cmd->add_option("--seed", a->seed, "random seed (default: the scene's, else 0)")->check(CLI::NonNegativeNumber);
     addSamplerOption(*cmd, *a);
     cmd->add_option("--resolution", a->resolution, "window and image size WxH (default: the scene's)");
-    cmd->add_option("--integrator", a->integrator, "light transport algorithm: " + joined(integratorNames()) + " (default: ptnee)");
-    cmd->add_option("--accel", a->accel, "acceleration structure: " + joined(accelNames()) + " (default: embree)");
+    cmd->add_option("--integrator", a->integrator, "light transport algorithm: " + commaSeparated(integratorNames()) + " (default: ptnee)");
+    cmd->add_option("--accel", a->accel, "acceleration structure: " + commaSeparated(accelNames()) + " (default: embree)");
     cmd->add_option("--max-depth", a->maxDepth, "maximum number of bounces, -1 = unlimited")->check(CLI::Range(-1, 1 << 20));
     cmd->add_option("--look-at", a->lookAt, "start camera EX,EY,EZ,TX,TY,TZ: replaces the scene's camera");
     cmd->add_option("--fov", a->fovDeg, "vertical field of view in degrees")->check(CLI::Range(0.001, 179.0));
@@ -408,7 +402,7 @@ Runner addViewCommand(CLI::App& app) {
         ->check(CLI::Range(0.001, 1e6));
     cmd->footer("Keys: W/A/S/D move, Q/E or Ctrl/Space down/up, Shift 4x faster, mouse looks (captured; Escape\n"
                 "releases it, a click captures it again). P saves EXR+PNG, C prints the camera as render options,\n"
-                "R restarts, 1-5 switch integrator (" + joined(integratorNames()) + "). Closing the window quits.");
+                "R restarts, 1-5 switch integrator (" + commaSeparated(integratorNames()) + "). Closing the window quits.");
     return [a] { return runView(*a); };
 }
 

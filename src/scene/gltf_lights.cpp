@@ -12,7 +12,6 @@ namespace tessera {
 namespace gl = tinygltf;
 
 namespace {
-std::string idx(const char* array, size_t i) { return std::string(array) + "[" + std::to_string(i) + "]"; }
 }  // namespace
 
 void GltfValues::fail(const std::string& element, const std::string& problem) const { throw SceneError(path, element, problem); }
@@ -54,7 +53,7 @@ void readGltfPunctualLight(const gl::Model& model, const GltfValues& values, con
     if (!(index >= 0 && index < double(model.lights.size())) || index != std::floor(index))
         values.fail(el, "'light' must index extensions.KHR_lights_punctual.lights[]");
     const gl::Light& gl = model.lights[size_t(index)];
-    const std::string lel = idx("KHR_lights_punctual.lights", size_t(index));
+    const std::string lel = indexedElement("KHR_lights_punctual.lights", size_t(index));
     if (gl.type != "point" && gl.type != "spot" && gl.type != "directional") {
         warnings.push_back(values.path + ": " + lel + ": light type '" + gl.type + "' is not supported and is ignored");
         return;

@@ -26,8 +26,6 @@ namespace {
 
 namespace gl = tinygltf;
 
-std::string idx(const char* array, size_t i) { return std::string(array) + "[" + std::to_string(i) + "]"; }
-
 /// Component types of vertex attributes: FLOAT and those KHR_mesh_quantization adds.
 constexpr std::initializer_list<int> kFloatOrQuantized = {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE,
                                                           TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_SHORT,
@@ -135,7 +133,7 @@ private:
                 auto pos = prim.attributes.find("POSITION");
                 if (draco != prim.extensions.end() && pos != prim.attributes.end() && pos->second >= 0 &&
                     size_t(pos->second) < model_.accessors.size() && model_.accessors[size_t(pos->second)].bufferView < 0)
-                    fail(idx("meshes", m) + "." + idx("primitives", p),
+                    fail(indexedElement("meshes", m) + "." + indexedElement("primitives", p),
                          "exists only Draco-compressed (KHR_draco_mesh_compression is not supported): " +
                              unsupportedExtensionEffect("KHR_draco_mesh_compression").required);
             }
@@ -195,7 +193,7 @@ private:
                                    options_.maxFileBytes);
         for (size_t i = 0; i < model_.materials.size(); ++i) {
             const gl::Material& gm = model_.materials[i];
-            const std::string el = idx("materials", i);
+            const std::string el = indexedElement("materials", i);
             Material m;
             m.name = gm.name.empty() ? el : gm.name;
             const std::vector<double>& bc = gm.pbrMetallicRoughness.baseColorFactor;
@@ -318,7 +316,7 @@ private:
     }
 
     void visitNode(int index, const Mat4d& parent, int depth) {
-        const std::string el = idx("nodes", size_t(std::max(index, 0)));
+        const std::string el = indexedElement("nodes", size_t(std::max(index, 0)));
         if (index < 0 || size_t(index) >= model_.nodes.size()) fail(el, "node index out of range");
         // glTF requires the node hierarchy to be a forest; a cycle or a shared child would otherwise
         // recurse forever or duplicate geometry.
@@ -355,7 +353,7 @@ private:
     }
 
     CameraDesc cameraDesc(int index, const Mat4d& world, const std::string& nodeEl) const {
-        const std::string el = idx("cameras", size_t(index));
+        const std::string el = indexedElement("cameras", size_t(index));
         const gl::Camera& cam = model_.cameras[size_t(index)];
         if (cam.type != "perspective") fail(el, "only perspective cameras are supported (got '" + cam.type + "')");
         double yfov = cam.perspective.yfov;
@@ -493,14 +491,14 @@ private:
     View accessorView(int accessorIndex, const std::string& el, int type, std::initializer_list<int> componentTypes) const {
         if (accessorIndex < 0 || size_t(accessorIndex) >= model_.accessors.size()) fail(el, "accessor index out of range");
         const gl::Accessor& a = model_.accessors[size_t(accessorIndex)];
-        const std::string ael = idx("accessors", size_t(accessorIndex));
+        const std::string ael = indexedElement("accessors", size_t(accessorIndex));
         if (a.sparse.isSparse) fail(ael, "sparse accessors are not supported");
         if (a.type != type) fail(ael, "unexpected accessor type for " + el);
         if (std::find(componentTypes.begin(), componentTypes.end(), a.componentType) == componentTypes.end())
             fail(ael, "unexpected component type " + std::to_string(a.componentType) + " for " + el);
         if (a.bufferView < 0 || size_t(a.bufferView) >= model_.bufferViews.size()) fail(ael, "bufferView index out of range");
         const gl::BufferView& bv = model_.bufferViews[size_t(a.bufferView)];
-        const std::string bel = idx("bufferViews", size_t(a.bufferView));
+        const std::string bel = indexedElement("bufferViews", size_t(a.bufferView));
         if (bv.buffer < 0 || size_t(bv.buffer) >= model_.buffers.size()) fail(bel, "buffer index out of range");
         const gl::Buffer& buf = model_.buffers[size_t(bv.buffer)];
         size_t elemSize = size_t(gl::GetComponentSizeInBytes(uint32_t(a.componentType))) *
@@ -615,7 +613,7 @@ private:
         Mat4d normalMatrix = glm::transpose(glm::inverse(world));
         for (size_t p = 0; p < gm.primitives.size(); ++p) {
             const gl::Primitive& prim = gm.primitives[p];
-            const std::string el = idx("meshes", size_t(meshIndex)) + "." + idx("primitives", p);
+            const std::string el = indexedElement("meshes", size_t(meshIndex)) + "." + indexedElement("primitives", p);
             int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
             if (mode == TINYGLTF_MODE_POINTS || mode == TINYGLTF_MODE_LINE || mode == TINYGLTF_MODE_LINE_LOOP ||
                 mode == TINYGLTF_MODE_LINE_STRIP) {

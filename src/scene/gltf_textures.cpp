@@ -9,8 +9,6 @@ namespace {
 
 namespace gl = tinygltf;
 
-std::string idx(const char* array, size_t i) { return std::string(array) + "[" + std::to_string(i) + "]"; }
-
 /// URIs are percent-encoded (RFC 3986, glTF 2.0 3.3.2); tinygltf decodes them before opening a file,
 /// so the path named in a message is decoded the same way.
 std::string percentDecoded(const std::string& uri) {
@@ -170,7 +168,7 @@ TextureRef GltfTextureReader::readTexture(const Slot& slot, ColorEncoding encodi
         fail(el, "texture index " + std::to_string(slot.index) + " out of range (" + std::to_string(model_.textures.size()) +
                      " textures)");
     const gl::Texture& tex = model_.textures[size_t(slot.index)];
-    const std::string tel = el + " -> " + idx("textures", size_t(slot.index));
+    const std::string tel = el + " -> " + indexedElement("textures", size_t(slot.index));
     TextureRef ref;
 
     int texCoord = slot.texCoord;
@@ -209,7 +207,7 @@ TextureRef GltfTextureReader::readTexture(const Slot& slot, ColorEncoding encodi
             fail(tel, "sampler index " + std::to_string(tex.sampler) + " out of range (" + std::to_string(model_.samplers.size()) +
                           " samplers)");
         const gl::Sampler& s = model_.samplers[size_t(tex.sampler)];
-        const std::string sel = tel + " -> " + idx("samplers", size_t(tex.sampler));
+        const std::string sel = tel + " -> " + indexedElement("samplers", size_t(tex.sampler));
         auto wrap = [&](int mode, const char* key) {
             switch (mode) {
             case TINYGLTF_TEXTURE_WRAP_REPEAT: return WrapMode::Repeat;
@@ -235,7 +233,7 @@ TextureRef GltfTextureReader::readTexture(const Slot& slot, ColorEncoding encodi
 const Image* GltfTextureReader::image(int index, ColorEncoding encoding, const std::string& el) {
     if (auto it = decoded_.find({index, encoding}); it != decoded_.end()) return it->second;
     const gl::Image& gi = model_.images[size_t(index)];
-    std::string name = idx("images", size_t(index));
+    std::string name = indexedElement("images", size_t(index));
     if (!gi.uri.empty()) name += " ('" + gi.uri + "')";
     else if (!gi.name.empty()) name += " ('" + gi.name + "')";
     const std::string iel = el + " -> " + name;
