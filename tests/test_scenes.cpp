@@ -61,7 +61,6 @@ const ShippedScene kScenes[] = {
     {"hdri-sun", "scenes/hdri-spheres/hdri-sun.gltf", false, 4, false, "pmndrs-hdri/sky.exr"},
 };
 
-
 /// Asset folders: the tests' (TESSERA_ASSETS, fetch cache, <source>/../shared/data).
 SceneLoadOptions loadOptions() {
     SceneLoadOptions o;

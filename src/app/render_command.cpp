@@ -104,7 +104,6 @@ int runRender(const RenderArgs& a) {
     return r.stats.interrupted ? 130 : 0;
 }
 
-
 }  // namespace
 
 std::string commaSeparated(const std::vector<std::string>& names) {

@@ -11,9 +11,6 @@ namespace tessera {
 
 namespace gl = tinygltf;
 
-namespace {
-}  // namespace
-
 void GltfValues::fail(const std::string& element, const std::string& problem) const { throw SceneError(path, element, problem); }
 
 /// An optional RGB array member with components in [0, maxComponent].
