@@ -10,17 +10,26 @@
 # Both integrators run with unlimited depth (Russian roulette), i.e. equal maximum path length.
 # Prints one line per round and binary, then per binary the median and range of the ratio
 # ptnee µs / bdpt µs (= bdpt's samples/s over ptnee's).
+#
+#   tools/bench_bdpt_speed.sh --instructions [--scene GLTF] [BINARY ...]
+#
+# The same ratio from instruction counts, for a host whose CPU times scatter: under valgrind's
+# callgrind (deterministic, needs the `valgrind` package), each integrator at 64² with 1 and 17 spp,
+# (I₁₇ − I₁)/(16 · 64²) instructions per sample, whole process, so that start-up and output cancel.
+# Instructions track CPU time only roughly (they ignore cache misses and branch mispredictions).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 SCENE=$ROOT/scenes/cornell-box/cornell-box.gltf
 ROUNDS=5
 CPU=1
+MODE=cpu
 BINS=()
 while [ $# -gt 0 ]; do
     case $1 in
     --scene) SCENE=$2; shift ;;
     --rounds) ROUNDS=$2; shift ;;
     --cpu) CPU=$2; shift ;;
+    --instructions) MODE=instructions ;;
     -*) echo "bench_bdpt_speed.sh: unknown option '$1' (see the header of $0)" >&2; exit 2 ;;
     *) BINS+=("$1") ;;
     esac
@@ -42,6 +51,25 @@ usPerSample() {  # binary integrator
     t9=$(cpu "$1" "$2" 9)
     awk -v a="$t9" -v b="$t1" 'BEGIN { printf "%.3f", (a - b) / (8 * 65536) * 1e6 }'
 }
+
+instructions() {  # binary integrator spp: prints the instructions of the whole process
+    valgrind --tool=callgrind --callgrind-out-file="$TMP/cg" "$1" render "$SCENE" --integrator "$2" --threads 1 \
+        --resolution 64x64 --spp "$3" --no-png --quiet -o "$TMP/out.exr" > /dev/null 2>&1
+    awk '/^(summary|totals):/ { print $2; exit }' "$TMP/cg"
+}
+if [ "$MODE" = instructions ]; then
+    command -v valgrind > /dev/null || { echo "bench_bdpt_speed.sh: --instructions needs valgrind (apt-get install valgrind)" >&2; exit 2; }
+    for b in "${BINS[@]}"; do
+        declare -A PER
+        for i in bdpt ptnee; do
+            i1=$(instructions "$b" "$i" 1)
+            i17=$(instructions "$b" "$i" 17)
+            PER[$i]=$(awk -v a="$i17" -v b="$i1" 'BEGIN { printf "%.0f", (a - b) / (16 * 4096) }')
+        done
+        echo "$b: instructions per sample: bdpt ${PER[bdpt]}, ptnee ${PER[ptnee]}; ptnee/bdpt ratio $(awk -v p="${PER[ptnee]}" -v q="${PER[bdpt]}" 'BEGIN { printf "%.4f", p / q }')"
+    done
+    exit 0
+fi
 
 declare -A RATIOS
 for r in $(seq "$ROUNDS"); do

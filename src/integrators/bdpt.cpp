@@ -30,14 +30,14 @@ Rgb BdptIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
     for (int t = 1; t <= nCamera; ++t) {
         // s = 1 resamples its light point, so it exists even when the light sub-path is empty (its
         // origin emitted nothing: a black texel of an emissive texture); leaving it out would drop
-        // the next-event strategy for those samples while its weight still counts on it.
-        for (int s = 0; s <= std::max(nLight, 1); ++s) {
-            if (s + t < 2) continue;
-            if (s > nLight && t == 1) continue;  // (1, 1) joins the light sub-path's own y0 to the lens
-            if (maxDepth >= 0 && s + t - 2 > maxDepth) continue;
-            // s = 0 needs z(t−1) on an emitter: most camera vertices are not, and the strategy is
-            // then zero without a call (the trace still lists every strategy).
-            if (s == 0 && camera[size_t(t - 1)].lightIndex == kInvalidId && !ctx.trace) continue;
+        // the next-event strategy for those samples while its weight still counts on it. (1, 1)
+        // joins the light sub-path's own y0 to the lens; s + t − 2 bounces at most maxDepth.
+        int sMax = t == 1 ? nLight : std::max(nLight, 1);
+        if (maxDepth >= 0) sMax = std::min(sMax, maxDepth + 2 - t);
+        // s = 0 needs z(t−1) on an emitter (and t ≥ 2): most camera vertices are not, and the
+        // strategy is then zero without a call (the trace still lists every strategy).
+        const int sMin = t >= 2 && (camera[size_t(t - 1)].lightIndex != kInvalidId || ctx.trace) ? 0 : 1;
+        for (int s = sMin; s <= sMax; ++s) {
             ConnectionResult r = connectBdpt(ctx, light, camera, s, t, sampler, settings_.heuristic);
             if (ctx.trace) [[unlikely]] {
                 // Unweighted C*_{s,t}, its MIS weight and what reaches the image (t = 1: a splat).

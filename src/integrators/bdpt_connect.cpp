@@ -1,6 +1,5 @@
 #include "integrators/bdpt_connect.h"
 
-#include <optional>
 
 #include "integrators/next_event.h"
 
@@ -24,16 +23,9 @@ void attenuateEdge(const RenderContext& ctx, Rgb& L, const PathVertex& a, const 
     if (attenuates) L *= T;
 }
 
-/// p_NEE(x0 | x1) / p_origin(x0), both area densities at x0 (bdpt_mis.h, `neeOverOriginA`): next-event
-/// estimation from x1 samples a sphere light over the cone it subtends (LightSet::sampleOne), a light
-/// sub-path starts uniformly on its area. Triangle, punctual and infinite lights are sampled alike
-/// both ways (ratio 1). The reference point is offset off x1 towards x0, as next_event.h offsets it
-/// towards the side the light is sampled from: a function of the two vertices only, so every
-/// strategy of a path computes the same factor.
-float neeOverOriginA(const RenderContext& ctx, const PathVertex& x0, const PathVertex& x1) {
-    if (x0.lightIndex == kInvalidId || x0.atInfinity || x1.type != VertexType::Surface) return 1.f;
+/// neeOverOriginA (below) for x0 on a sphere light.
+float sphereNeeOverOriginA(const RenderContext& ctx, const PathVertex& x0, const PathVertex& x1) {
     const LightSet& lights = ctx.scene.lights();
-    if (lights.light(x0.lightIndex).type != LightType::Sphere) return 1.f;
     Vec3f d = x0.p - x1.p;
     float dist2 = glm::dot(d, d);
     if (!(dist2 > 0.f)) return 1.f;
@@ -41,6 +33,19 @@ float neeOverOriginA(const RenderContext& ctx, const PathVertex& x0, const PathV
     float neeA = lights.pdfW(x0.lightIndex, pRef, x0.p, x0.ng) * std::abs(glm::dot(x0.ng, d)) / (dist2 * std::sqrt(dist2));
     float originA = pdfLightOriginA(ctx, x0);
     return neeA > 0.f && originA > 0.f ? neeA / originA : 1.f;
+}
+
+/// p_NEE(x0 | x1) / p_origin(x0), both area densities at x0 (bdpt_mis.h, `neeOverOriginA`): next-event
+/// estimation from x1 samples a sphere light over the cone it subtends (LightSet::sampleOne), a light
+/// sub-path starts uniformly on its area. Triangle, punctual and infinite lights are sampled alike
+/// both ways (ratio 1). The reference point is offset off x1 towards x0, as next_event.h offsets it
+/// towards the side the light is sampled from: a function of the two vertices only, so every
+/// strategy of a path computes the same factor.
+/// Every weight asks: the tests inline, the sphere's case out of line.
+inline float neeOverOriginA(const RenderContext& ctx, const PathVertex& x0, const PathVertex& x1) {
+    if (x0.lightIndex == kInvalidId || x0.atInfinity || x1.type != VertexType::Surface) return 1.f;
+    if (ctx.scene.lights().light(x0.lightIndex).type != LightType::Sphere) return 1.f;
+    return sphereNeeOverOriginA(ctx, x0, x1);
 }
 
 MisVertex misVertexOf(const PathVertex& v) { return {v.pdfFwdA, v.pdfRevA, v.delta}; }
@@ -140,6 +145,10 @@ float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> l
 
 namespace {
 
+// The strategies below have one caller, connectBdpt, and are inlined into it: a dozen connections
+// per sample each paid a second call with a dozen arguments (spans spill to the stack) on top of
+// connectBdpt's own.
+
 /// s = 0: the camera sub-path found an emitter at z(t−1): C = α_E · Le (Veach eq. 10.8 with s = 0).
 ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const PathVertex> camera, int t, MisHeuristic heuristic,
                                    bool computeWeight) {
@@ -153,7 +162,7 @@ ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const Pat
 
 /// t = 1 (light tracing): y(s−1) joined to a resampled lens point; the contribution lands on
 /// another pixel.
-ConnectionResult connectLens(const RenderContext& ctx, std::span<const PathVertex> light, int s, Sampler& sampler,
+[[gnu::always_inline]] inline ConnectionResult connectLens(const RenderContext& ctx, std::span<const PathVertex> light, int s, Sampler& sampler,
                              MisHeuristic heuristic, bool computeWeight) {
     ConnectionResult r;
     if (size_t(s) > light.size()) return r;
@@ -166,18 +175,22 @@ ConnectionResult connectLens(const RenderContext& ctx, std::span<const PathVerte
     if (ctx.camera.isPinhole()) sampler.skip2D();
     else uLens = sampler.get2D();
     if (!ctx.camera.sampleIncoming(qs.p, uLens, cs)) return r;
-    PathVertex lens;
-    lens.type = VertexType::Camera;
+    // Only the lens vertex's position, axis and weight change between connections: one vertex per
+    // thread, whose other fields keep their defaults, spares building a whole (mostly surface) vertex.
+    thread_local PathVertex lens = [] {
+        PathVertex v;
+        v.type = VertexType::Camera;
+        return v;
+    }();
     lens.p = cs.pLens;
     lens.ng = lens.ns = ctx.camera.forward();
     lens.beta = Rgb(cs.We / cs.pdfW);
-    const Vec3f w = directionTo(qs, lens);
-    if (w == Vec3f(0.f)) return r;
-    // A surface end's BSDF serves f here and the two densities of its weight (one frame, one copy).
+    const Vec3f& w = cs.wiWorld;  // directionTo(qs, lens), bit for bit: the same difference over its length
+    // A surface end's BSDF serves f here and the two densities of its weight (built once; for a
+    // light vertex, s = 1, it is a Lambertian stand-in that nothing reads).
     const bool surface = qs.type == VertexType::Surface;
-    std::optional<SurfaceBsdf> bsdf;
-    if (surface) bsdf.emplace(qs.bsdf, qs.ns, qs.ng);
-    Rgb f = surface ? bsdf->eval(qs.woWorld, w, TransportMode::Importance) : evalVertexTowards(ctx, qs, w, TransportMode::Importance);
+    const SurfaceBsdf bsdf(qs.bsdf, qs.ns, qs.ng, SurfaceBsdf::Use::EvalOnly);
+    Rgb f = surface ? bsdf.eval(qs.woWorld, w, TransportMode::Importance) : evalVertexTowards(ctx, qs, w, TransportMode::Importance);
     r.L = qs.beta * f * lens.beta * cosAt(qs, cs.wiWorld);
     if (isBlack(r.L) || !unoccluded(ctx, qs, lens)) return ConnectionResult{};
     attenuateEdge(ctx, r.L, qs, lens);
@@ -187,7 +200,7 @@ ConnectionResult connectLens(const RenderContext& ctx, std::span<const PathVerte
     if (computeWeight) {
         ConnectionDensities d;
         if (surface && s >= 2) {
-            pdfBothWaysA(ctx, *bsdf, light[size_t(s - 2)], qs, lens, d.ptRevA, d.qsMinusRevA);
+            pdfBothWaysA(ctx, bsdf, light[size_t(s - 2)], qs, lens, d.ptRevA, d.qsMinusRevA);
             d.qsRevA = pdfNextA(ctx, nullptr, lens, qs);
         } else {
             d = connectionDensities(ctx, light, {&lens, 1}, s, 1, &qs, &lens);
@@ -199,15 +212,20 @@ ConnectionResult connectLens(const RenderContext& ctx, std::span<const PathVerte
 
 /// s = 1 (next-event estimation): a light point resampled from z(t−1), exactly as ptnee samples it
 /// (integrators/next_event.h).
-ConnectionResult connectLight(const RenderContext& ctx, std::span<const PathVertex> camera, int t, Sampler& sampler,
+[[gnu::always_inline]] inline ConnectionResult connectLight(const RenderContext& ctx, std::span<const PathVertex> camera, int t, Sampler& sampler,
                               MisHeuristic heuristic, bool computeWeight) {
     ConnectionResult r;
     const PathVertex& pt = camera[size_t(t - 1)];
     NextEventSample ne;
     if (!pt.connectible() || !sampleNextEvent(ctx.scene.lights(), pt.p, pt.ng, pt.woWorld, sampler, ne)) return r;
     const LightSample& ls = ne.light;
-    PathVertex y0;
-    y0.type = VertexType::Light;
+    // One light vertex per thread, as connectLens's lens vertex: every field that differs between
+    // light samples is set here, the others keep their defaults.
+    thread_local PathVertex y0 = [] {
+        PathVertex v;
+        v.type = VertexType::Light;
+        return v;
+    }();
     y0.p = ls.p;
     y0.atInfinity = ls.isInfinite;
     y0.ng = y0.ns = ls.isInfinite ? ls.wi : ls.n;
@@ -218,7 +236,7 @@ ConnectionResult connectLight(const RenderContext& ctx, std::span<const PathVert
     const Vec3f w = directionTo(pt, y0);
     if (w == Vec3f(0.f)) return r;
     // z(t−1) is a surface (connectible, t ≥ 2): its BSDF serves f and its two densities.
-    SurfaceBsdf bsdf(pt.bsdf, pt.ns, pt.ng);
+    SurfaceBsdf bsdf(pt.bsdf, pt.ns, pt.ng, SurfaceBsdf::Use::EvalOnly);
     r.L = pt.beta * bsdf.eval(pt.woWorld, w, TransportMode::Radiance) * y0.beta * cosAt(pt, ls.wi);
     if (isBlack(r.L) || !lightVisible(ctx.accel, pt.p, pt.ng, ls)) return ConnectionResult{};
     attenuateEdge(ctx, r.L, pt, y0);
@@ -235,7 +253,7 @@ ConnectionResult connectLight(const RenderContext& ctx, std::span<const PathVert
 
 /// General connection (Veach eq. 10.8): α_L · f(y(s−1)) · G · f(z(t−1)) · α_E, both ends surfaces
 /// (s ≥ 2 and t ≥ 2: every vertex after a sub-path's first is one).
-ConnectionResult connectVertices(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
+[[gnu::always_inline]] inline ConnectionResult connectVertices(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
                                  int s, int t, MisHeuristic heuristic, bool computeWeight) {
     ConnectionResult r;
     const PathVertex& qs = light[size_t(s - 1)];
@@ -248,10 +266,10 @@ ConnectionResult connectVertices(const RenderContext& ctx, std::span<const PathV
     float G = cosAt(qs, wn) * cosAt(pt, wn) / dist2;
     // Each end's BSDF is built once: f here, and the two densities of the weight below. A third of
     // these connections leave an end on a side its BSDF does not scatter to: the other is skipped.
-    SurfaceBsdf bsdfPt(pt.bsdf, pt.ns, pt.ng);
+    SurfaceBsdf bsdfPt(pt.bsdf, pt.ns, pt.ng, SurfaceBsdf::Use::EvalOnly);
     Rgb fPt = bsdfPt.eval(pt.woWorld, -wn, TransportMode::Radiance);
     if (isBlack(fPt)) return r;
-    SurfaceBsdf bsdfQs(qs.bsdf, qs.ns, qs.ng);
+    SurfaceBsdf bsdfQs(qs.bsdf, qs.ns, qs.ng, SurfaceBsdf::Use::EvalOnly);
     r.L = qs.beta * bsdfQs.eval(qs.woWorld, wn, TransportMode::Importance) * G * fPt * pt.beta;
     if (isBlack(r.L) || !unoccluded(ctx, qs, pt)) return ConnectionResult{};
     attenuateEdge(ctx, r.L, qs, pt);
@@ -271,8 +289,9 @@ ConnectionResult connectVertices(const RenderContext& ctx, std::span<const PathV
 ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
                              int s, int t, Sampler& sampler, MisHeuristic heuristic, bool computeWeight) {
     if (t < 1 || s + t < 2) return {};
-    sampler.startConnection(s, t);
     if (s == 0) return connectEmitterHit(ctx, camera, t, heuristic, computeWeight);
+    // Only the resampling strategies draw numbers: each from its own block of the sampler.
+    if (s == 1 || t == 1) sampler.startConnection(s, t);
     if (t == 1) return connectLens(ctx, light, s, sampler, heuristic, computeWeight);
     // For s = 1 the light point is resampled: the light sub-path may even be empty.
     if (s == 1) return connectLight(ctx, camera.first(size_t(t)), t, sampler, heuristic, computeWeight);

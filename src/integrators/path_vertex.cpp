@@ -31,7 +31,7 @@ float pdfNextA(const RenderContext& ctx, const PathVertex* prev, const PathVerte
         return pdfLightDirectionA(ctx, cur, next);
     case VertexType::Surface: {
         if (!prev) return 0.f;
-        SurfaceBsdf bsdf(cur.bsdf, cur.ns, cur.ng);
+        SurfaceBsdf bsdf(cur.bsdf, cur.ns, cur.ng, SurfaceBsdf::Use::EvalOnly);
         Vec3f wo = directionTo(cur, *prev);
         pdfW = bsdf.pdfFwdW(wo, wi);
         break;
@@ -60,7 +60,7 @@ void pdfBothWaysA(const RenderContext& ctx, const PathVertex& pred, const PathVe
         pdfToPredA = pdfNextA(ctx, &b, cur, pred);
         return;
     }
-    pdfBothWaysA(ctx, SurfaceBsdf(cur.bsdf, cur.ns, cur.ng), pred, cur, b, pdfToBA, pdfToPredA);
+    pdfBothWaysA(ctx, SurfaceBsdf(cur.bsdf, cur.ns, cur.ng, SurfaceBsdf::Use::EvalOnly), pred, cur, b, pdfToBA, pdfToPredA);
 }
 
 void pdfBothWaysA(const RenderContext& ctx, const SurfaceBsdf& bsdfAtCur, const PathVertex& pred, const PathVertex& cur,
@@ -175,7 +175,7 @@ Rgb evalVertexTowards(const RenderContext& ctx, const PathVertex& v, const Vec3f
         // Radiance (area lights), intensity towards w (point, spot lights).
         return ctx.scene.lights().emitted(v.lightIndex, v.ng, w, v.bary);
     case VertexType::Surface: {
-        SurfaceBsdf bsdf(v.bsdf, v.ns, v.ng);
+        SurfaceBsdf bsdf(v.bsdf, v.ns, v.ng, SurfaceBsdf::Use::EvalOnly);
         return bsdf.eval(v.woWorld, w, mode);
     }
     }
@@ -288,7 +288,7 @@ void traceCameraSubpath(const RenderContext& ctx, Vec2f raster, Sampler& sampler
     out.clear();
     if (maxVertices == 0) return;
     Ray ray = ctx.camera.generateRay(raster, sampler.get2D());
-    PathVertex z0;
+    PathVertex& z0 = out.emplace_back();  // built in place, as randomWalk builds its vertices
     z0.type = VertexType::Camera;
     z0.p = ray.o;
     z0.ng = z0.ns = ctx.camera.forward();
@@ -297,7 +297,6 @@ void traceCameraSubpath(const RenderContext& ctx, Vec2f raster, Sampler& sampler
     float pdfPosA, pdfDirW;
     ctx.camera.pdfEmission(ray.d, pdfPosA, pdfDirW);
     z0.pdfFwdA = pdfPosA;  // never used by the weights (no strategy hits the lens)
-    out.push_back(z0);
     randomWalk(ctx, ray, Rgb(1.f), sampler, TransportMode::Radiance, maxVertices, out);
 }
 
@@ -311,7 +310,7 @@ void traceLightSubpath(const RenderContext& ctx, Sampler& sampler, int maxVertic
     Vec2f uDir = sampler.get2D();
     LightEmission le;
     if (!lights.sampleEmission(uPick, uPos, uDir, le) || isBlack(le.Le)) return;
-    PathVertex y0;
+    PathVertex& y0 = out.emplace_back();
     y0.type = VertexType::Light;
     y0.p = le.p;
     y0.ng = y0.ns = le.isInfinite ? -le.dir : le.n;
@@ -323,7 +322,6 @@ void traceLightSubpath(const RenderContext& ctx, Sampler& sampler, int maxVertic
     // connected (not connectible), so its beta is unused.
     y0.beta = Rgb(1.f / le.pdfPosA);
     y0.pdfFwdA = le.isInfinite ? le.pdfDirW : le.pdfPosA;
-    out.push_back(y0);
     // Infinite lights: the ray leaves the disk along the direction, cos = 1, and β = L / (pdfPos ·
     // pdfDir) is the radiance through the disk's area per unit solid angle (pbrt-v3 §16.3.1).
     float cosLight = le.isDeltaPos || le.isInfinite ? 1.f : std::abs(glm::dot(le.n, le.dir));

@@ -27,8 +27,20 @@ struct SurfaceBsdfSample {
 
 class SurfaceBsdf {
 public:
-    SurfaceBsdf(const BsdfParams& params, const Vec3f& ns, const Vec3f& ng)
-        : mat_(params), frame_(ns), ng_(ng), delta_(isDeltaMaterial(params)) {}
+    /// What a SurfaceBsdf will be asked. A Lambertian lobe's evaluation and densities need only the
+    /// two cosines with the shading normal, so an evaluation-only BSDF of a diffuse point (two per
+    /// bidirectional connection) skips the tangent frame, which only sample() and the other lobes use.
+    enum class Use : uint8_t { EvalAndSample, EvalOnly };
+
+    SurfaceBsdf(const BsdfParams& params, const Vec3f& ns, const Vec3f& ng, Use use = Use::EvalAndSample)
+        : mat_(params), ng_(ng), delta_(isDeltaMaterial(params)) {
+        if (use == Use::EvalOnly && mat_.type == MaterialType::Diffuse) {
+            frame_.n = ns;
+            tangentsSet_ = false;
+        } else {
+            frame_ = Frame(ns);
+        }
+    }
 
     /// True when every lobe is delta (no light sampling here); a mixed material (smooth coat over a
     /// diffuse base) is not, and each sample says whether it took a delta lobe (isDelta).
@@ -83,7 +95,8 @@ public:
         Vec3f woL = frame_.toLocal(woWorld), wiL = frame_.toLocal(wiWorld);
         return evalBsdfWithPdf(mat_, woL, wiL, mode, pdfFwdW) * shadingCorrection(woWorld, wiWorld, mode);
     }
-    /// Samples wi given wo. False when no direction is produced or it violates the side rule.
+    /// Samples wi given wo. False when no direction is produced or it violates the side rule. Not
+    /// on a BSDF built with Use::EvalOnly.
     bool sample(const Vec3f& woWorld, float uLobe, Vec2f u, TransportMode mode, SurfaceBsdfSample& out) const;
 
     /// The importance-transport shading-normal factor |wo·ns| |wi·ng| / (|wo·ng| |wi·ns|)
@@ -107,10 +120,12 @@ private:
         return reflectShading == reflectGeometric;
     }
 
+
     BsdfParams mat_;  ///< by value: textured points resolve their own parameters
-    Frame frame_;
+    Frame frame_;     ///< only frame_.n is meaningful when tangentsSet_ is false (Use::EvalOnly, Lambertian)
     Vec3f ng_;
     bool delta_;      ///< isDeltaMaterial(mat_), asked once per point
+    bool tangentsSet_ = true;
 };
 
 }  // namespace tessera
