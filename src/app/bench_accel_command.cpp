@@ -19,6 +19,7 @@
 #include "accel/bvh_accel.h"
 #include "accel/kdtree_accel.h"
 #include "app/bench_accel_processes.h"
+#include "app/bench_clock.h"
 #include "app/commands.h"
 #include "core/error.h"
 #include "geometry/instances.h"
@@ -35,11 +36,6 @@ std::vector<std::string> splitList(const std::string& s) {
     while (std::getline(ss, item, ','))
         if (!item.empty()) out.push_back(item);
     return out;
-}
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
 }
 
 /// The benchmark's three ray sets, from the one generator validate-accel uses: primary rays in pixel
@@ -92,13 +88,6 @@ size_t traceAllAtStackOffset(const Accel& accel, const std::vector<Ray>& rays, Q
     volatile char* pad = static_cast<char*>(__builtin_alloca(shift + 64));
     pad[0] = probe;  // keeps the allocation
     return traceAll(accel, rays, query);
-}
-
-/// Seconds of CPU time of `clock` (CLOCK_THREAD_CPUTIME_ID, CLOCK_PROCESS_CPUTIME_ID).
-double cpuSeconds(clockid_t clock) {
-    timespec ts{};
-    clock_gettime(clock, &ts);
-    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
 /// Seconds to trace all rays; `checksum` keeps the work. `cpuClock` (one thread only): the

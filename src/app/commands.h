@@ -15,6 +15,7 @@ Runner addRenderCommand(CLI::App& app);
 Runner addCompareCommand(CLI::App& app);
 Runner addValidateAccelCommand(CLI::App& app);
 Runner addBenchAccelCommand(CLI::App& app);
+Runner addBenchPhotonsCommand(CLI::App& app);
 Runner addViewCommand(CLI::App& app);
 Runner addMergeCommand(CLI::App& app);
 Runner addFarmCommand(CLI::App& app);

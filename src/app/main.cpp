@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
     app::Runner compare = app::addCompareCommand(app);
     app::Runner validateAccel = app::addValidateAccelCommand(app);
     app::Runner benchAccel = app::addBenchAccelCommand(app);
+    app::Runner benchPhotons = app::addBenchPhotonsCommand(app);
     app::Runner view = app::addViewCommand(app);
     app::Runner merge = app::addMergeCommand(app);
     app::Runner farm = app::addFarmCommand(app);
@@ -34,6 +35,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("compare")) return compare();
         if (app.got_subcommand("validate-accel")) return validateAccel();
         if (app.got_subcommand("bench-accel")) return benchAccel();
+        if (app.got_subcommand("bench-photons")) return benchPhotons();
         if (app.got_subcommand("view")) return view();
         if (app.got_subcommand("merge")) return merge();
         if (app.got_subcommand("farm")) return farm();
