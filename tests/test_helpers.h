@@ -2,6 +2,7 @@
 // Small helpers shared by the tests: procedural scenes and paths to the project's files.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "integrators/integrator.h"
+#include "io/image_output.h"
 #include "render/film.h"
 #include "render/renderer.h"
 #include "scene/assets.h"
@@ -48,6 +50,29 @@ inline std::optional<std::string> findTestAsset(const std::string& name) { retur
 /// The message of a test skipped for a missing asset.
 inline std::string missingAssetMessage(const std::string& name) {
     return name + " not found: run tools/fetch_assets.sh, or set TESSERA_ASSETS to a folder holding it";
+}
+
+/// Mean over f x f pixel blocks: what a render at 1/f resolution estimates (pixels are box filters);
+/// a standard error combines as sqrt(Σ se²) / f².
+inline io::Image boxDownsample(const io::Image& in, int f, bool isStderr) {
+    if (f == 1) return in;
+    io::Image out;
+    out.width = in.width / f;
+    out.height = in.height / f;
+    out.metadata = in.metadata;
+    out.rgba.assign(size_t(out.width) * out.height * 4, 0.0f);
+    for (int y = 0; y < out.height; ++y)
+        for (int x = 0; x < out.width; ++x)
+            for (int c = 0; c < 4; ++c) {
+                double sum = 0;
+                for (int dy = 0; dy < f; ++dy)
+                    for (int dx = 0; dx < f; ++dx) {
+                        double v = in.rgba[(size_t(y * f + dy) * in.width + size_t(x * f + dx)) * 4 + c];
+                        sum += isStderr ? v * v : v;
+                    }
+                out.rgba[(size_t(y) * out.width + x) * 4 + c] = float(isStderr ? std::sqrt(sum) / (f * f) : sum / (f * f));
+            }
+    return out;
 }
 
 /// A fresh, empty temporary directory for one test.

@@ -78,6 +78,8 @@ TEST(Merge, PtSplitsAreBitIdentical) { expectMergeIsBitIdentical("pt"); }
 TEST(Merge, PtneeSplitsAreBitIdentical) { expectMergeIsBitIdentical("ptnee"); }
 TEST(Merge, LtSplitsAreBitIdentical) { expectMergeIsBitIdentical("lt"); }
 TEST(Merge, BdptSplitsAreBitIdentical) { expectMergeIsBitIdentical("bdpt"); }
+// One photon map per sample index (integrators/sppm.h): parts prepare the same maps as the full render.
+TEST(Merge, SppmSplitsAreBitIdentical) { expectMergeIsBitIdentical("sppm"); }
 
 /// Runs a merge expected to fail: exit 2, one line on stderr, which contains every `needles`.
 void expectRefused(const fs::path& dir, const std::string& parts, const std::vector<std::string>& needles) {
@@ -108,6 +110,10 @@ TEST(Merge, RefusesOtherSettingsAndCorruptFiles) {
     expectRefused(dir, q(a) + q(renderPart(dir, "ptnee", "8:16", 4)), {"different renders", "seed", "'3'", "'4'"});
     expectRefused(dir, q(a) + q(renderPart(dir, "pt", "8:16")), {"different renders", "integrator", "'ptnee'", "'pt'"});
     expectRefused(dir, q(a) + q(renderPart(dir, "ptnee", "8:16", 3, "cornell-box-specular")), {"different renders", "scene_hash"});
+    // sppm's photon settings are part of what a render is.
+    fs::path photonsA = renderPart(dir, "sppm", "0:8"), photonsB = dir / "sppm-alpha.partial";
+    ASSERT_EQ(tessera(dir, "render " + scene() + common("sppm") + " --alpha 0.5 --samples 8:16 -o " + q(photonsB)).code, 0);
+    expectRefused(dir, q(photonsA) + q(photonsB), {"different renders", "photon_alpha"});
     expectRefused(dir, q(a) + q(dir / "absent.partial"), {"absent.partial"});
 
     // A flipped byte in the film: the checksum names it.

@@ -107,29 +107,6 @@ struct Reference {
     double samples = 0;       ///< spp behind judgedSe, all renders together
 };
 
-/// Mean over f x f pixel blocks: what a render at 1/f resolution estimates (pixels are box filters);
-/// a standard error combines as sqrt(Σ se²) / f².
-io::Image boxDownsample(const io::Image& in, int f, bool isStderr) {
-    if (f == 1) return in;
-    io::Image out;
-    out.width = in.width / f;
-    out.height = in.height / f;
-    out.metadata = in.metadata;
-    out.rgba.assign(size_t(out.width) * out.height * 4, 0.0f);
-    for (int y = 0; y < out.height; ++y)
-        for (int x = 0; x < out.width; ++x)
-            for (int c = 0; c < 4; ++c) {
-                double sum = 0;
-                for (int dy = 0; dy < f; ++dy)
-                    for (int dx = 0; dx < f; ++dx) {
-                        double v = in.rgba[(size_t(y * f + dy) * in.width + size_t(x * f + dx)) * 4 + c];
-                        sum += isStderr ? v * v : v;
-                    }
-                out.rgba[(size_t(y) * out.width + x) * 4 + c] = float(isStderr ? std::sqrt(sum) / (f * f) : sum / (f * f));
-            }
-    return out;
-}
-
 /// refs/NAME.exr and refs/NAME-stderr.exr with the provenance the Z-test needs, and
 /// refs/NAME-INTEGRATOR-stderr.exr: the judged integrator's own standard error at the test's
 /// resolution (tessera:spp_total samples per pixel; refs/README.md), to which the reference is
@@ -145,8 +122,8 @@ Reference loadReference(const std::string& name) {
     int f = r.judgedSe.width > 0 ? r.mean.width / r.judgedSe.width : 1;
     EXPECT_EQ(r.judgedSe.width * f, r.mean.width) << judged;
     EXPECT_EQ(r.judgedSe.height * f, r.mean.height) << judged;
-    r.mean = boxDownsample(r.mean, f, false);
-    r.stderr_ = boxDownsample(r.stderr_, f, true);
+    r.mean = test::boxDownsample(r.mean, f, false);
+    r.stderr_ = test::boxDownsample(r.stderr_, f, true);
     return r;
 }
 

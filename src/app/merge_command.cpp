@@ -54,6 +54,9 @@ io::Metadata mergedMetadata(const MergedRender& m, size_t partCount) {
         {"tessera:resumed", "false"},
         {"tessera:merged_partials", std::to_string(partCount)},
     };
+    // An sppm render's photon settings (app/scene_options.h, photonSettings), as its parts recorded them.
+    for (const auto& [key, value] : h)
+        if (key.rfind("photon_", 0) == 0) md.push_back({"tessera:" + key, value});
     std::string ranges;
     for (const SampleRange& r : m.ranges) ranges += (ranges.empty() ? "" : ",") + r.str();
     md.push_back({"tessera:merged_samples", ranges});

@@ -57,21 +57,14 @@ void writeBdptStrategyImages(const RenderJob& a, const RenderSettings& s, const 
         }
 }
 
-/// Hexadecimal float: the exact bits, so a camera changed in the last digit is a different camera.
-std::string exact(float v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%a", double(v));
-    return buf;
-}
-
 /// Every setting that decides the pixels of a render (and so must match to resume it). The
 /// acceleration structure and the thread count are left out: they do not change the image.
 CheckpointHeader checkpointHeader(const RenderJob& a, const RenderSettings& s, const CameraDesc& cam, const Integrator& integrator,
                                   int tileSize) {
     std::string camera;
     for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) camera += exact(cam.cameraToWorld[c][r]) + ",";
-    camera += exact(cam.yfov) + "," + exact(cam.apertureRadius) + "," + exact(cam.focusDistance);
+        for (int r = 0; r < 4; ++r) camera += exactFloat(cam.cameraToWorld[c][r]) + ",";
+    camera += exactFloat(cam.yfov) + "," + exactFloat(cam.apertureRadius) + "," + exactFloat(cam.focusDistance);
     CheckpointHeader header = {
         {"renderer", std::string("tessera ") + versionString() + " (" + gitRevision() + ")"},
         {"scene_hash", fnv1a64OfFile(a.scene)},
@@ -84,6 +77,7 @@ CheckpointHeader checkpointHeader(const RenderJob& a, const RenderSettings& s, c
         {"camera", camera},
         {"tile_size", std::to_string(tileSize)},
     };
+    for (const auto& [key, value] : photonSettings(s)) header.push_back({key, value});
     // The command line's environment changes the pixels without changing the scene file.
     if (!a.env.empty() || a.envRotate || a.envIntensity)
         header.push_back({"environment", a.env + (a.env.empty() || !std::filesystem::exists(a.env) ? "" : " " + fnv1a64OfFile(a.env)) +
@@ -224,7 +218,7 @@ JobPlan planRenderJob(const RenderJob& job, const RenderSettings& settings, cons
                              " spp (give the total with --spp N)");
     }
     JobPlan plan{settings, camera, outputPaths(job), nullptr};
-    plan.integrator = createIntegrator(settings.integrator);
+    plan.integrator = createIntegrator(settings);
     return plan;
 }
 

@@ -3,6 +3,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <cstdio>
 #include <filesystem>
 #include <sstream>
 
@@ -115,6 +116,9 @@ RenderSettings resolveRenderSettings(const SceneOptions& a, const Scene& scene) 
         s.sampler = *kind;
     }
     if (!a.integrator.empty()) s.integrator = a.integrator;
+    if (a.photonRadius) s.photonRadius = *a.photonRadius;
+    if (a.photonAlpha) s.photonAlpha = *a.photonAlpha;
+    if (a.photonPaths) s.photonPaths = *a.photonPaths;
     return s;
 }
 
@@ -151,7 +155,7 @@ void checkFilmFits(const SceneOptions& a, const RenderSettings& s) {
 }
 
 io::Metadata imageMetadata(const std::string& scenePath, const RenderSettings& s, const ImageFacts& f) {
-    return {
+    io::Metadata md = {
         {"Software", std::string("Tessera ") + versionString() + " (" + gitRevision() + ")"},
         {"tessera:version", versionString()},
         {"tessera:git", gitRevision()},
@@ -171,6 +175,20 @@ io::Metadata imageMetadata(const std::string& scenePath, const RenderSettings& s
         {"tessera:interrupted", f.interrupted ? "true" : "false"},
         {"tessera:resumed", f.resumed ? "true" : "false"},
     };
+    for (const auto& [key, value] : photonSettings(s)) md.push_back({"tessera:" + key, value});
+    return md;
+}
+
+std::string exactFloat(float v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%a", double(v));
+    return buf;
+}
+
+std::vector<std::pair<std::string, std::string>> photonSettings(const RenderSettings& s) {
+    if (s.integrator != "sppm") return {};
+    return {{"photon_radius", exactFloat(s.photonRadius)}, {"photon_alpha", exactFloat(s.photonAlpha)},
+            {"photon_paths", std::to_string(s.photonPaths)}};
 }
 
 }  // namespace tessera::app

@@ -29,6 +29,8 @@ struct SceneOptions {
     double fovDeg = 0.0;           ///< 0: the camera's
     bool allowExternalFiles = false;
     double maxMemoryGiB = 16.0;    ///< input files and the film
+    std::optional<float> photonRadius, photonAlpha;  ///< --radius, --alpha (sppm)
+    std::optional<uint64_t> photonPaths;             ///< --photons (sppm)
 };
 
 /// Registers `--sampler` (render and view).
@@ -56,6 +58,13 @@ CameraDesc resolveCamera(const SceneOptions& o, const std::optional<CameraDesc>&
 /// Refuses a resolution whose film alone would exceed the memory limit, instead of dying in the
 /// allocator.
 void checkFilmFits(const SceneOptions& o, const RenderSettings& s);
+
+/// Hexadecimal float: the exact bits, so a setting changed in the last digit is a different setting.
+std::string exactFloat(float v);
+
+/// The settings that change an `sppm` image (empty for other integrators): what its metadata and
+/// its checkpoint and partial-file headers record, so that resumes and merges refuse a mismatch.
+std::vector<std::pair<std::string, std::string>> photonSettings(const RenderSettings& s);
 
 /// What an output image's metadata says about the samples it holds.
 struct ImageFacts {

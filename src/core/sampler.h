@@ -112,6 +112,8 @@ public:
     }
 
     SamplerKind kind() const { return kind_; }
+    /// The sample index the sampler was made for (a photon-mapping pass's iteration).
+    uint32_t sampleIndex() const { return index_; }
 
     /// The camera block, open at construction: slot 0 is the pixel jitter, slot 1 the lens.
     void startCamera() { open(kCameraBlock, true); }

@@ -5,11 +5,17 @@
 #include "integrators/lt.h"
 #include "integrators/pt.h"
 #include "integrators/ptnee.h"
+#include "integrators/sppm.h"
 
 namespace tessera {
 
 /// `bdpt-balance` is bdpt with the balance heuristic (β = 1) instead of the power heuristic.
-std::vector<std::string> integratorNames() { return {"pt", "ptnee", "lt", "bdpt", "bdpt-balance"}; }
+std::vector<std::string> integratorNames() { return {"pt", "ptnee", "lt", "bdpt", "bdpt-balance", "sppm"}; }
+
+std::unique_ptr<Integrator> createIntegrator(const RenderSettings& s) {
+    if (s.integrator == "sppm") return std::make_unique<SppmIntegrator>(SppmSettings{s.photonRadius, s.photonAlpha, s.photonPaths});
+    return createIntegrator(s.integrator);
+}
 
 std::unique_ptr<Integrator> createIntegrator(std::string_view name) {
     if (name == "pt") return std::make_unique<PtIntegrator>();
@@ -17,6 +23,7 @@ std::unique_ptr<Integrator> createIntegrator(std::string_view name) {
     if (name == "lt") return std::make_unique<LtIntegrator>();
     if (name == "bdpt") return std::make_unique<BdptIntegrator>();
     if (name == "bdpt-balance") return std::make_unique<BdptIntegrator>(BdptSettings{MisHeuristic::Balance});
+    if (name == "sppm") return std::make_unique<SppmIntegrator>();
     std::string known;
     for (const std::string& n : integratorNames()) known += (known.empty() ? "" : ", ") + n;
     throw InputError("unknown integrator '" + std::string(name) + "' (known: " + known + ")");

@@ -17,6 +17,7 @@
 namespace tessera {
 
 class SampleTrace;
+class ThreadPool;
 
 /// Everything a sample needs to read; shared by all threads.
 struct RenderContext {
@@ -58,11 +59,23 @@ public:
     /// Estimates the radiance reaching the camera through `raster` (a jittered position inside
     /// `pixel`). Returns the pixel's own estimate; may splat to other pixels.
     virtual Rgb sample(const RenderContext& ctx, Vec2i pixel, Vec2f raster, Sampler& sampler, SplatSink& splats) const = 0;
+
+    /// What a pass's samples share, computed before them: the photon map of a photon-mapping
+    /// integrator for sample indices [firstSample, firstSample + count). Called by the scheduler
+    /// between passes (never while sample() runs), on the render's seed and sampler kind; the
+    /// result must be a function of these arguments alone, so that resumed and merged renders
+    /// repeat it exactly. Default: nothing to prepare.
+    virtual void preparePass(const RenderContext& /*ctx*/, uint32_t /*firstSample*/, uint32_t /*count*/, uint64_t /*seed*/,
+                             SamplerKind /*kind*/, ThreadPool& /*pool*/) const {}
+    /// The most samples per pixel one pass may hold (what preparePass can prepare at once); 0 = any.
+    virtual uint32_t maxPassSamples() const { return 0; }
 };
 
 /// Names accepted by createIntegrator.
 std::vector<std::string> integratorNames();
 /// Throws InputError on an unknown name.
 std::unique_ptr<Integrator> createIntegrator(std::string_view name);
+/// The integrator `settings.integrator` with the settings that tune it (sppm's photons).
+std::unique_ptr<Integrator> createIntegrator(const RenderSettings& settings);
 
 }  // namespace tessera

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/fp_env.h"
+#include "core/thread_pool.h"
 #include "integrators/sample_trace.h"
 
 namespace tessera {
@@ -91,6 +92,12 @@ SampleReplay replaySample(const RenderContext& ctx, const Integrator& integrator
           << " with " << integrator.name() << " (sampler " << samplerName(samplerKind) << ")\n";
     // Exactly the renderer's sequence: Sampler(pixel, sample, seed, kind), jitter from its first 2D draw.
     Sampler sampler(Vec2i(id.x, id.y), id.sample, seed, samplerKind);
+    {
+        // What the render's pass prepared for this sample (a photon map), on the untraced context:
+        // the trace lists the sample's own rays.
+        ThreadPool pool(1);
+        integrator.preparePass(ctx, id.sample, 1, seed, samplerKind, pool);
+    }
     Vec2f raster = Vec2f(float(id.x), float(id.y)) + sampler.get2D();
     trace << "  raster (" << std::setprecision(9) << raster.x << ", " << raster.y << ")\n";
     SplatSink sink;

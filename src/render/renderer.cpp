@@ -168,7 +168,9 @@ RenderStats TileScheduler::run() {
             passSpp_ = uint32_t(std::clamp(left / std::max(perSpp, 1e-9), 1.0, double(passSpp_)));
         }
         uint32_t n = std::min(passSpp_, target - s0_);
+        if (uint32_t most = integrator_.maxPassSamples(); most > 0) n = std::min(n, most);
         startPass();
+        integrator_.preparePass(ctx_, s0_, n, opt_.seed, opt_.sampler, pool);
         // One item per tile, claimed in tile order; parallelFor returns when the pass is done (the
         // barrier before the splat merge and the checkpoint). The interrupt flag is read before
         // every tile, so a stop request skips the tiles not yet started.
