@@ -25,7 +25,7 @@ Rgb PtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler&
         if (!(depth == 0 ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) {
             // An escaping ray sees the environment (zero without one).
             if (scene.lights().hasEnvironment()) {
-                if (!isBlack(sigmaLeave)) beta *= segmentTransmittance(sigmaLeave, Rgb(0.f), kInfiniteSegment);
+                attenuateEscape(beta, sigmaLeave);
                 L += beta * scene.lights().environmentLe(glm::normalize(ray.d));
             }
             break;
@@ -35,8 +35,7 @@ Rgb PtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler&
         const BsdfParams params = scene.bsdfParams(si, ctx.camera.pixelFootprint(si.p));
         // Russian roulette keeps looking at the BSDF weights only (rrScale): a path through index-
         // matched glass stays deterministic, and absorption ends paths by driving β to zero.
-        if (Rgb sigmaArrive = volumeSigmaAt(params, si.ng, wo); segmentAttenuates(sigmaLeave, sigmaArrive))
-            beta *= segmentTransmittance(sigmaLeave, sigmaArrive, glm::length(si.p - prevP));
+        attenuateArrival(beta, sigmaLeave, params, si.ng, wo, si.p, prevP);
         if (si.lightIndex != kInvalidId) L += beta * scene.lights().emitted(si.lightIndex, si.ng, wo, si.bary);
         SampleTrace* trace = ctx.trace;
         if (trace) [[unlikely]] {

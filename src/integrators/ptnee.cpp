@@ -123,7 +123,7 @@ Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampl
         // Camera rays follow their neighbours (tiles in pixel order): the coherent kernel.
         if (!(depth == 0 ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) {
             if (scene.lights().hasEnvironment()) {
-                if (!isBlack(sigmaLeave)) beta *= segmentTransmittance(sigmaLeave, Rgb(0.f), kInfiniteSegment);
+                attenuateEscape(beta, sigmaLeave);
                 addEscapedEnvironment(ctx, glm::normalize(ray.d), beta, deltaBounce, prevPdfW, L);
             }
             break;
@@ -131,8 +131,7 @@ Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampl
         SurfaceInteraction si = scene.interaction(ray, hit);
         Vec3f wo = -glm::normalize(ray.d);
         const BsdfParams params = scene.bsdfParams(si, ctx.camera.pixelFootprint(si.p));
-        if (Rgb sigmaArrive = volumeSigmaAt(params, si.ng, wo); segmentAttenuates(sigmaLeave, sigmaArrive))
-            beta *= segmentTransmittance(sigmaLeave, sigmaArrive, glm::length(si.p - prevSurfaceP));
+        attenuateArrival(beta, sigmaLeave, params, si.ng, wo, si.p, prevSurfaceP);
         SampleTrace* trace = ctx.trace;
         if (trace) [[unlikely]] {
             trace->vertex(depth, si.p, si.ng, si.materialId, beta);

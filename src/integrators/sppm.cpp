@@ -92,7 +92,7 @@ Rgb SppmIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
             // The camera reached the environment through delta scattering alone (every other path
             // to it is a photon's).
             if (scene.lights().hasEnvironment()) {
-                if (!isBlack(sigmaLeave)) beta *= segmentTransmittance(sigmaLeave, Rgb(0.f), kInfiniteSegment);
+                attenuateEscape(beta, sigmaLeave);
                 L += beta * scene.lights().environmentLe(glm::normalize(ray.d));
             }
             break;
@@ -100,8 +100,7 @@ Rgb SppmIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
         SurfaceInteraction si = scene.interaction(ray, hit);
         const Vec3f wo = -glm::normalize(ray.d);
         const BsdfParams params = scene.bsdfParams(si, ctx.camera.pixelFootprint(si.p));
-        if (Rgb sigmaArrive = volumeSigmaAt(params, si.ng, wo); segmentAttenuates(sigmaLeave, sigmaArrive))
-            beta *= segmentTransmittance(sigmaLeave, sigmaArrive, glm::length(si.p - prevP));
+        attenuateArrival(beta, sigmaLeave, params, si.ng, wo, si.p, prevP);
         if (si.lightIndex != kInvalidId) L += beta * scene.lights().emitted(si.lightIndex, si.ng, wo, si.bary);
         const SurfaceBsdf bsdf(params, si.ns, si.ng);
         const int t = depth + 1;  // camera vertex index: segments from the camera

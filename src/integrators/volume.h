@@ -78,4 +78,18 @@ inline Rgb segmentTransmittance(const Rgb& sigmaA, const Rgb& sigmaB, float leng
 /// The length to pass for a segment one of whose ends lies at infinity.
 inline constexpr float kInfiniteSegment = std::numeric_limits<float>::infinity();
 
+// The two places a camera path's segment ends (pt, ptnee, sppm), with the rule above:
+/// a ray that leaves the scene from a surface whose side it left has σa `sigmaLeave`: β loses the
+/// channels that side absorbs (an infinite segment);
+inline void attenuateEscape(Rgb& beta, const Rgb& sigmaLeave) {
+    if (!isBlack(sigmaLeave)) beta *= segmentTransmittance(sigmaLeave, Rgb(0.f), kInfiniteSegment);
+}
+/// a ray from `prevP` that arrives at a surface (its material `params`, normal ng, seen from wo):
+/// β times the segment's transmittance, untouched when neither end absorbs.
+inline void attenuateArrival(Rgb& beta, const Rgb& sigmaLeave, const BsdfParams& params, const Vec3f& ng, const Vec3f& wo,
+                             const Vec3f& p, const Vec3f& prevP) {
+    if (Rgb sigmaArrive = volumeSigmaAt(params, ng, wo); segmentAttenuates(sigmaLeave, sigmaArrive))
+        beta *= segmentTransmittance(sigmaLeave, sigmaArrive, glm::length(p - prevP));
+}
+
 }  // namespace tessera
