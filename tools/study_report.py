@@ -21,7 +21,7 @@ SUMMARY_FIELDS = ["scene", "integrator", "accel", "renders", "spp_series", "seco
                   "ref_floor", "ref_limited", "samples_per_second", "verdict"]
 
 COLOURS = {"pt": "#d62728", "ptnee": "#1f77b4", "lt": "#ff7f0e", "bdpt": "#2ca02c",
-           "bdpt-balance": "#9467bd", "embree": "#1f77b4", "bvh": "#2ca02c", "brute": "#7f7f7f",
+           "bdpt-balance": "#9467bd", "sppm": "#8c564b", "embree": "#1f77b4", "bvh": "#2ca02c", "brute": "#7f7f7f",
            "kdtree": "#ff7f0e"}
 
 
