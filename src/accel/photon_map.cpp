@@ -27,36 +27,31 @@ void PhotonKdTree::build(std::span<const Vec3f> points, ThreadPool* pool) {
     nodes_ = gatherFinite(points);
     axis_.assign(nodes_.size(), 0);
     if (nodes_.empty()) return;
-    // The top levels split serially and leave 2^kSerialLevels ranges, which build independently:
-    // each node's split only reorders the points of its own range.
-    using Range = std::pair<uint32_t, uint32_t>;
-    std::vector<Range> ranges{{0u, uint32_t(nodes_.size())}}, next;
-    for (int level = 0; level < kSerialLevels; ++level) {
-        next.clear();
-        for (auto [b, e] : ranges) {
-            if (e - b <= 1) continue;
-            const uint32_t m = b + (e - b) / 2;
-            splitRange(b, e);
-            next.push_back({b, m});
-            next.push_back({m + 1, e});
-        }
-        ranges.swap(next);
-    }
-    auto buildSubtree = [&](size_t i) {
-        std::vector<Range> stack{ranges[i]};
-        while (!stack.empty()) {
-            auto [b, e] = stack.back();
-            stack.pop_back();
-            if (e - b <= 1) continue;
-            const uint32_t m = b + (e - b) / 2;
-            splitRange(b, e);
-            stack.push_back({b, m});
-            stack.push_back({m + 1, e});
-        }
-    };
-    if (pool && pool->threads() > 1) pool->parallelFor(ranges.size(), buildSubtree);
+    // The top levels split serially and leave up to 2^kSerialLevels ranges, which build
+    // independently: each node's split only reorders the points of its own range.
+    std::vector<Range> subtrees;
+    buildLevels({0u, uint32_t(nodes_.size())}, kSerialLevels, &subtrees);
+    auto buildSubtree = [&](size_t i) { buildLevels(subtrees[i], -1, nullptr); };
+    if (pool && pool->threads() > 1) pool->parallelFor(subtrees.size(), buildSubtree);
     else
-        for (size_t i = 0; i < ranges.size(); ++i) buildSubtree(i);
+        for (size_t i = 0; i < subtrees.size(); ++i) buildSubtree(i);
+}
+
+void PhotonKdTree::buildLevels(Range root, int levels, std::vector<Range>* below) {
+    std::vector<std::pair<Range, int>> stack{{root, 0}};
+    while (!stack.empty()) {
+        auto [r, depth] = stack.back();
+        stack.pop_back();
+        if (r.second - r.first <= 1) continue;
+        if (levels >= 0 && depth == levels) {
+            below->push_back(r);
+            continue;
+        }
+        splitRange(r.first, r.second);
+        const uint32_t m = r.first + (r.second - r.first) / 2;
+        stack.push_back({{m + 1, r.second}, depth + 1});
+        stack.push_back({{r.first, m}, depth + 1});
+    }
 }
 
 void PhotonKdTree::splitRange(uint32_t begin, uint32_t end) {

@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "core/bounds.h"
@@ -50,6 +51,10 @@ public:
     size_t memoryBytes() const { return nodes_.capacity() * sizeof(PhotonRef) + axis_.capacity(); }
 
 private:
+    using Range = std::pair<uint32_t, uint32_t>;  ///< positions [first, second)
+    /// Builds the subtree of `root` down to `levels` levels below it (all, when negative) and
+    /// appends the unsplit ranges left at that depth to `below`.
+    void buildLevels(Range root, int levels, std::vector<Range>* below);
     void splitRange(uint32_t begin, uint32_t end);
 
     // Node of range [b, e): its point is at m = b + (e − b)/2, left child [b, m), right [m + 1, e).
