@@ -113,6 +113,8 @@ Rgb SppmIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
                 sum += bsdf.eval(wo, ph.wi, TransportMode::Radiance) * ph.power;
             });
             L += beta * sum * mergeNorm;
+            // A Lambertian point has no delta lobe to go on through: its sample would only end the path.
+            if (params.type == MaterialType::Diffuse) break;
         }
         if (ctx.maxDepth >= 0 && depth >= ctx.maxDepth) break;
         // Continue only through delta lobes: a non-delta continuation is what the merge above
