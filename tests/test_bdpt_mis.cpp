@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "integrators/bdpt_connect.h"
+#include "integrators/vcm.h"
 #include "scene/gltf_loader.h"
 #include "test_helpers.h"
 
@@ -53,9 +54,11 @@ void splitPath(const std::vector<PathVertex>& x, const std::vector<double>& pL, 
 /// For the full path x0 … xk (x0 on a light, xk the lens): the weight of every strategy equals the
 /// brute-force p_s^β / Σ p_i^β, and the weights sum to one. False (nothing checked) when some
 /// density along the path is zero. A delta light (`lightIsDelta`: point, spot, directional) cannot
-/// be hit, so the strategy s = 0 does not exist for it.
+/// be hit, so the strategy s = 0 does not exist for it. `withMerges`: VCM's weights, the k − 1
+/// merges at the interior vertices joining the connections (p_VM,i = p_(i+1) · p←(x_i) · η,
+/// Georgiev et al. 2012), with η chosen so that merges and connections weigh alike.
 bool checkWeightsOfPath(const RenderContext& ctx, const std::vector<PathVertex>& x, const BsdfParams& lightMaterial,
-                        bool lightIsDelta = false) {
+                        bool lightIsDelta = false, bool withMerges = false) {
     const int k = int(x.size()) - 1;
     // p→(x_i): density from the light side; p←(x_i): from the camera side (x_k is the lens).
     std::vector<double> pL(size_t(k + 1), 0.0), pE(size_t(k + 1), 0.0);
@@ -65,25 +68,55 @@ bool checkWeightsOfPath(const RenderContext& ctx, const std::vector<PathVertex>&
     for (int i = 0; i < k; ++i)
         if (!(pL[size_t(i)] > 0.0 && pE[size_t(i)] > 0.0)) return false;  // e.g. x1 behind the one-sided light
 
+    const double eta = withMerges ? 1.0 / pE[size_t(k / 2)] : 0.0;
     for (MisHeuristic h : {MisHeuristic::Power, MisHeuristic::Balance}) {
         double beta = h == MisHeuristic::Power ? 2.0 : 1.0;
-        std::vector<double> ps(size_t(k + 1));
-        double sumPs = 0.0;
-        for (int s = lightIsDelta ? 1 : 0; s <= k; ++s) {  // t = k + 1 − s ≥ 1
+        std::vector<double> ps(size_t(k + 1)), psMerge(size_t(k + 1), 0.0);
+        auto connectionDensity = [&](int s) {
             double p = 1.0;
             for (int i = 0; i < s; ++i) p *= pL[size_t(i)];
             for (int i = s; i < k; ++i) p *= pE[size_t(i)];
-            ps[size_t(s)] = std::pow(p, beta);
+            return p;
+        };
+        double sumPs = 0.0;
+        for (int s = lightIsDelta ? 1 : 0; s <= k; ++s) {  // t = k + 1 − s ≥ 1
+            ps[size_t(s)] = std::pow(connectionDensity(s), beta);
             sumPs += ps[size_t(s)];
+        }
+        for (int i = 1; withMerges && i < k; ++i) {
+            psMerge[size_t(i)] = std::pow(connectionDensity(i + 1) * pE[size_t(i)] * eta, beta);
+            sumPs += psMerge[size_t(i)];
         }
         double sumW = 0.0;
         std::vector<PathVertex> ys, zs;
         for (int s = lightIsDelta ? 1 : 0; s <= k; ++s) {
             int t = k + 1 - s;
             splitPath(x, pL, pE, s, lightMaterial, ys, zs);
-            bdptMisPrefixes(ctx, ys, zs, h);
-            float w = bdptStrategyWeight(ctx, ys, zs, s, t, s > 0 ? &ys.back() : nullptr, &zs.back(), h);
+            bdptMisPrefixes(ctx, ys, zs, h, eta);
+            float w = bdptStrategyWeight(ctx, ys, zs, s, t, s > 0 ? &ys.back() : nullptr, &zs.back(), h, eta);
             expectRelNear(w, ps[size_t(s)] / sumPs, 2e-3, "weight of (s=" + std::to_string(s) + ", t=" + std::to_string(t) + ")");
+            sumW += w;
+        }
+        for (int i = 1; withMerges && i < k; ++i) {
+            // The merge at x_i: the light sub-path x0 … x_i leaves its photon there, the camera
+            // sub-path xk … x_i ends on it.
+            std::vector<PathVertex> photonPath;
+            splitPath(x, pL, pE, i + 1, lightMaterial, photonPath, zs);
+            photonPath.back().woWorld = directionTo(photonPath.back(), photonPath[size_t(i - 1)]);
+            bdptMisPrefixes(ctx, photonPath, {}, h, eta);
+            std::vector<VcmPhoton> photons;
+            std::vector<Vec3f> positions;
+            vcmPhotonsOfPath(ctx, photonPath, h, eta, photons, positions);
+            if (photons.empty() || photons.back().depth != uint32_t(i)) {
+                ADD_FAILURE() << "no photon at light vertex " << i;
+                continue;
+            }
+            splitPath(x, pL, pE, i, lightMaterial, ys, zs);
+            bdptMisPrefixes(ctx, {}, zs, h, eta);
+            const PathVertex& xi = zs.back();
+            SurfaceBsdf bsdf(xi.bsdf, xi.ns, xi.ng, SurfaceBsdf::Use::EvalOnly);
+            float w = vcmMergeWeight(ctx, photons.back(), zs, int(zs.size()), bsdf, eta, h);
+            expectRelNear(w, psMerge[size_t(i)] / sumPs, 2e-3, "weight of the merge at x" + std::to_string(i));
             sumW += w;
         }
         EXPECT_NEAR(sumW, 1.0, 1e-4) << "path of " << k + 1 << " vertices";
@@ -93,7 +126,9 @@ bool checkWeightsOfPath(const RenderContext& ctx, const std::vector<PathVertex>&
 
 }  // namespace
 
-TEST(BdptMis, StoredDensitiesMatchAndWeightsOfAllStrategiesSumToOne) {
+namespace {
+
+void checkCornellPaths(bool withMerges) {
     std::vector<std::string> warnings;
     Scene scene = loadGltfScene(test::sourcePath("scenes/cornell-box/cornell-box.gltf"), warnings);
     auto accel = createAccel("embree", scene.geometry);
@@ -118,10 +153,18 @@ TEST(BdptMis, StoredDensitiesMatchAndWeightsOfAllStrategiesSumToOne) {
         std::vector<PathVertex> x;
         x.push_back(light[0]);
         for (size_t j = camera.size(); j-- > 0;) x.push_back(camera[j]);
-        if (checkWeightsOfPath(ctx, x, scene.materials[lightMaterial].bsdf)) ++pathsChecked;
+        if (checkWeightsOfPath(ctx, x, scene.materials[lightMaterial].bsdf, false, withMerges)) ++pathsChecked;
     }
     EXPECT_GE(pathsChecked, 50);
 }
+
+}  // namespace
+
+TEST(BdptMis, StoredDensitiesMatchAndWeightsOfAllStrategiesSumToOne) { checkCornellPaths(false); }
+
+// VCM (integrators/vcm.h): connections and merges under one weight, the merges' from the photon's
+// stored sums and the camera BSDF's densities at the merge; η = 0 is bdpt's weight.
+TEST(VcmMis, WeightsOfConnectionsAndMergesSumToOneAndEqualBruteForce) { checkCornellPaths(true); }
 
 // connectBdpt takes a connection's densities from the BSDFs it built to evaluate f; they must be
 // exactly those connectionDensities evaluates from the vertices (the weights' one definition), for
@@ -182,7 +225,9 @@ TEST(BdptMis, DeltaVerticesAreSkippedAndTheRestSumToOne) {
 // vertex's is the emission disk's 1/(π r²) times the cosine there. The weights of all strategies
 // must still sum to one and equal the brute-force ratios, in the Cornell box (open at the front,
 // so camera rays escape) lit by its area light, a constant environment and a sun.
-TEST(BdptMis, WeightsSumToOneOnPathsFromTheEnvironmentAndADirectionalLight) {
+namespace {
+
+void checkPathsAtInfinity(bool withMerges) {
     std::vector<std::string> warnings;
     Scene scene = loadGltfScene(test::sourcePath("scenes/cornell-box/cornell-box.gltf"), warnings);
     EnvironmentDesc env;
@@ -213,16 +258,21 @@ TEST(BdptMis, WeightsSumToOneOnPathsFromTheEnvironmentAndADirectionalLight) {
             // The camera ray escaped: the path starts at the environment vertex it ends with.
             if (camera.size() < 3) continue;  // the environment seen directly has one strategy
             for (size_t j = camera.size(); j-- > 0;) x.push_back(camera[j]);
-            if (checkWeightsOfPath(ctx, x, unused)) ++escaped;
+            if (checkWeightsOfPath(ctx, x, unused, false, withMerges)) ++escaped;
             continue;
         }
         if (light.empty() || !light[0].atInfinity) continue;
         x.push_back(light[0]);
         for (size_t j = camera.size(); j-- > 0;) x.push_back(camera[j]);
         bool directional = lights.isDelta(light[0].lightIndex);
-        if (checkWeightsOfPath(ctx, x, unused, directional)) ++(directional ? fromDirectional : fromEnvironment);
+        if (checkWeightsOfPath(ctx, x, unused, directional, withMerges)) ++(directional ? fromDirectional : fromEnvironment);
     }
     EXPECT_GE(fromEnvironment, 40);
     EXPECT_GE(escaped, 40);
     EXPECT_GE(fromDirectional, 40);
 }
+
+}  // namespace
+
+TEST(BdptMis, WeightsSumToOneOnPathsFromTheEnvironmentAndADirectionalLight) { checkPathsAtInfinity(false); }
+TEST(VcmMis, WeightsSumToOneOnPathsFromTheEnvironmentAndADirectionalLight) { checkPathsAtInfinity(true); }

@@ -80,6 +80,7 @@ TEST(Merge, LtSplitsAreBitIdentical) { expectMergeIsBitIdentical("lt"); }
 TEST(Merge, BdptSplitsAreBitIdentical) { expectMergeIsBitIdentical("bdpt"); }
 // One photon map per sample index (integrators/sppm.h): parts prepare the same maps as the full render.
 TEST(Merge, SppmSplitsAreBitIdentical) { expectMergeIsBitIdentical("sppm"); }
+TEST(Merge, VcmSplitsAreBitIdentical) { expectMergeIsBitIdentical("vcm"); }
 
 /// Runs a merge expected to fail: exit 2, one line on stderr, which contains every `needles`.
 void expectRefused(const fs::path& dir, const std::string& parts, const std::vector<std::string>& needles) {

@@ -14,7 +14,7 @@ using namespace tessera;
 
 namespace {
 
-Film renderSppm(const Scene& scene, int w, int h, int spp, uint64_t seed, int threads, SppmSettings settings = {}) {
+Film renderSppm(const Scene& scene, int w, int h, int spp, uint64_t seed, int threads, PhotonSettings settings = {}) {
     auto accel = createAccel("embree", scene.geometry);
     SppmIntegrator sppm(settings);
     RenderOptions opt{.spp = spp, .threads = threads, .seed = seed, .tileSize = 16};
@@ -48,10 +48,10 @@ double relMseAgainst(const Film& film, const io::Image& ref) {
 
 TEST(Sppm, RadiusFollowsKnausZwickerSequence) {
     // r_(i+1)² = r_i² (i + α)/(i + 1) from r_1 at sample index 0; shrinking, never to zero in finite i.
-    EXPECT_EQ(SppmIntegrator::iterationRadius(2.f, 0.75f, 0), 2.f);
-    EXPECT_FLOAT_EQ(SppmIntegrator::iterationRadius(2.f, 0.75f, 1), 2.f * std::sqrt(1.75f / 2.f));
-    EXPECT_FLOAT_EQ(SppmIntegrator::iterationRadius(2.f, 0.75f, 2), 2.f * std::sqrt(1.75f / 2.f * 2.75f / 3.f));
-    float r100 = SppmIntegrator::iterationRadius(1.f, 0.75f, 100), r1000 = SppmIntegrator::iterationRadius(1.f, 0.75f, 1000);
+    EXPECT_EQ(photonIterationRadius(2.f, 0.75f, 0), 2.f);
+    EXPECT_FLOAT_EQ(photonIterationRadius(2.f, 0.75f, 1), 2.f * std::sqrt(1.75f / 2.f));
+    EXPECT_FLOAT_EQ(photonIterationRadius(2.f, 0.75f, 2), 2.f * std::sqrt(1.75f / 2.f * 2.75f / 3.f));
+    float r100 = photonIterationRadius(1.f, 0.75f, 100), r1000 = photonIterationRadius(1.f, 0.75f, 1000);
     EXPECT_LT(r1000, r100);
     // r_i² ∝ i^(α−1) for large i: ten times the iterations, 10^(−0.125) times the radius.
     EXPECT_NEAR(r1000 / r100, std::pow(10.0, -0.125), 0.01);

@@ -186,7 +186,7 @@ std::string exactFloat(float v) {
 }
 
 std::vector<std::pair<std::string, std::string>> photonSettings(const RenderSettings& s) {
-    if (s.integrator != "sppm") return {};
+    if (s.integrator != "sppm" && s.integrator != "vcm") return {};
     return {{"photon_radius", exactFloat(s.photonRadius)}, {"photon_alpha", exactFloat(s.photonAlpha)},
             {"photon_paths", std::to_string(s.photonPaths)}};
 }

@@ -29,8 +29,8 @@ struct SceneOptions {
     double fovDeg = 0.0;           ///< 0: the camera's
     bool allowExternalFiles = false;
     double maxMemoryGiB = 16.0;    ///< input files and the film
-    std::optional<float> photonRadius, photonAlpha;  ///< --radius, --alpha (sppm)
-    std::optional<uint64_t> photonPaths;             ///< --photons (sppm)
+    std::optional<float> photonRadius, photonAlpha;  ///< --radius, --alpha (sppm, vcm)
+    std::optional<uint64_t> photonPaths;             ///< --photons (sppm, vcm)
 };
 
 /// Registers `--sampler` (render and view).
@@ -62,7 +62,7 @@ void checkFilmFits(const SceneOptions& o, const RenderSettings& s);
 /// Hexadecimal float: the exact bits, so a setting changed in the last digit is a different setting.
 std::string exactFloat(float v);
 
-/// The settings that change an `sppm` image (empty for other integrators): what its metadata and
+/// The settings that change an `sppm` or `vcm` image (empty for other integrators): what its metadata and
 /// its checkpoint and partial-file headers record, so that resumes and merges refuse a mismatch.
 std::vector<std::pair<std::string, std::string>> photonSettings(const RenderSettings& s);
 

@@ -25,6 +25,12 @@ Rgb BdptIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
         traceSubpath(*ctx.trace, "camera vertex", camera);
         traceSubpath(*ctx.trace, "light vertex", light);
     }
+    return connectAllStrategies(ctx, light, camera, sampler, splats, settings_);
+}
+
+Rgb connectAllStrategies(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
+                         Sampler& sampler, SplatSink& splats, const BdptSettings& settings, double eta) {
+    const int maxDepth = ctx.maxDepth;
     Rgb L(0.f);
     const int nCamera = int(camera.size()), nLight = int(light.size());
     for (int t = 1; t <= nCamera; ++t) {
@@ -38,7 +44,7 @@ Rgb BdptIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
         // strategy is then zero without a call (the trace still lists every strategy).
         const int sMin = t >= 2 && (camera[size_t(t - 1)].lightIndex != kInvalidId || ctx.trace) ? 0 : 1;
         for (int s = sMin; s <= sMax; ++s) {
-            ConnectionResult r = connectBdpt(ctx, light, camera, s, t, sampler, settings_.heuristic);
+            ConnectionResult r = connectBdpt(ctx, light, camera, s, t, sampler, settings.heuristic, true, eta);
             if (ctx.trace) [[unlikely]] {
                 // Unweighted C*_{s,t}, its MIS weight and what reaches the image (t = 1: a splat).
                 ctx.trace->begin("strategy", s, t);
@@ -48,8 +54,8 @@ Rgb BdptIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
                 if (t == 1) ctx.trace->add("raster", Vec3f(r.raster.x, r.raster.y, 0.f));
             }
             if (isBlack(r.L)) continue;
-            if ((settings_.onlyS >= 0 && s != settings_.onlyS) || (settings_.onlyT >= 0 && t != settings_.onlyT)) continue;
-            Rgb c = settings_.unweighted ? r.L : r.L * r.weight;
+            if ((settings.onlyS >= 0 && s != settings.onlyS) || (settings.onlyT >= 0 && t != settings.onlyT)) continue;
+            Rgb c = settings.unweighted ? r.L : r.L * r.weight;
             if (t == 1) splats.splat(ctx.camera.width(), ctx.camera.height(), r.raster, c);
             else L += c;
         }

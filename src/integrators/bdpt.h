@@ -5,8 +5,11 @@
 /// vertex connected to the lens, splatted) and all general connections, combined by multiple
 /// importance sampling (power heuristic by default, balance selectable). Russian roulette ends both
 /// sub-paths; ctx.maxDepth (bounces) bounds s + t − 2 when set.
+#include <span>
+
 #include "integrators/bdpt_mis.h"
 #include "integrators/integrator.h"
+#include "integrators/path_vertex.h"
 
 namespace tessera {
 
@@ -18,6 +21,12 @@ struct BdptSettings {
     int onlyS = -1, onlyT = -1;
     bool unweighted = false;  ///< contributions without their MIS weight (debug view only)
 };
+
+/// Every connection strategy (s, t) of one sample's sub-paths (bdptMisPrefixes must have run on
+/// them with the same `eta`): returns the camera pixel's share and splats the t = 1 strategies.
+/// `eta` > 0 weights them against VCM's merges too (bdpt_mis.h's (‡)).
+Rgb connectAllStrategies(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
+                         Sampler& sampler, SplatSink& splats, const BdptSettings& settings, double eta = 0.0);
 
 class BdptIntegrator final : public Integrator {
 public:

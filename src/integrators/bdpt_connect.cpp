@@ -52,23 +52,33 @@ MisVertex misVertexOf(const PathVertex& v) { return {v.pdfFwdA, v.pdfRevA, v.del
 
 }  // namespace
 
-void bdptMisPrefixes(const RenderContext& ctx, std::span<PathVertex> light, std::span<PathVertex> camera, MisHeuristic heuristic) {
-    // M_j of bdpt_mis.h's (†), in each sub-path's sampling order. The light side's c_0 needs y0
+double bdptLightNeeFactor(const RenderContext& ctx, std::span<const PathVertex> light, MisHeuristic heuristic) {
+    return light.size() >= 2 ? misNeeFactor(neeOverOriginA(ctx, light[0], light[1]), heuristic) : 1.0;
+}
+
+void bdptMisPrefixes(const RenderContext& ctx, std::span<PathVertex> light, std::span<PathVertex> camera, MisHeuristic heuristic,
+                     double eta) {
+    // M_j of bdpt_mis.h's (‡), in each sub-path's sampling order. The light side's c_0 needs y0
     // hittable (not a delta light) and its g_1 is strategy s = 1's factor at y1; the lens has no
-    // strategy (c_0 = 0, M_0 = 0).
+    // strategy (c_0 = 0, M_0 = 0). Merges (η > 0) happen at every vertex after the first that the
+    // path leaves through a non-delta lobe.
     double prefix = 0.0;
     if (!light.empty()) {
         const bool lightIsDelta = ctx.scene.lights().isDelta(light[0].lightIndex);
-        const double g1 = light.size() >= 2 ? misNeeFactor(neeOverOriginA(ctx, light[0], light[1]), heuristic) : 1.0;
+        const double g1 = bdptLightNeeFactor(ctx, light, heuristic);
         for (size_t j = 0; j < light.size(); ++j) {
             bool prevDelta = j > 0 ? light[j - 1].delta : lightIsDelta;
-            prefix = misPrefixStep(prefix, misVertexOf(light[j]), !light[j].delta && !prevDelta, j == 1 ? g1 : 1.0, heuristic);
+            const double mu = misMergeTerm(j >= 1 && !light[j].delta, light[j].pdfFwdA, eta, heuristic);
+            prefix = misPrefixStep(prefix, misVertexOf(light[j]), !light[j].delta && !prevDelta, j == 1 ? g1 : 1.0, heuristic, mu);
             light[j].misPrefix = prefix;
         }
     }
     prefix = 0.0;
     for (size_t j = 0; j < camera.size(); ++j) {
-        if (j > 0) prefix = misPrefixStep(prefix, misVertexOf(camera[j]), !camera[j].delta && !camera[j - 1].delta, 1.0, heuristic);
+        if (j > 0) {
+            const double mu = misMergeTerm(!camera[j].delta && !camera[j].atInfinity, camera[j].pdfFwdA, eta, heuristic);
+            prefix = misPrefixStep(prefix, misVertexOf(camera[j]), !camera[j].delta && !camera[j - 1].delta, 1.0, heuristic, mu);
+        }
         camera[j].misPrefix = prefix;
     }
 }
@@ -96,13 +106,13 @@ ConnectionDensities connectionDensities(const RenderContext& ctx, std::span<cons
 }
 
 float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
-                         int s, int t, const PathVertex* qs, const PathVertex* pt, MisHeuristic heuristic) {
-    return bdptStrategyWeight(ctx, light, camera, s, t, qs, pt, connectionDensities(ctx, light, camera, s, t, qs, pt), heuristic);
+                         int s, int t, const PathVertex* qs, const PathVertex* pt, MisHeuristic heuristic, double eta) {
+    return bdptStrategyWeight(ctx, light, camera, s, t, qs, pt, connectionDensities(ctx, light, camera, s, t, qs, pt), heuristic, eta);
 }
 
 float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
                          int s, int t, const PathVertex* qs, const PathVertex* pt, const ConnectionDensities& d,
-                         MisHeuristic heuristic) {
+                         MisHeuristic heuristic, double eta) {
     // A camera ray that escaped to the environment (z1 at infinity) can only be found by that
     // camera ray: no lens connection reaches a direction.
     if (s == 0 && t == 2 && pt->atInfinity) return 1.f;
@@ -137,10 +147,19 @@ float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> l
     if (s >= 1) y.end.pdfRevA = d.qsRevA;
     if (s >= 2) y.next.pdfRevA = d.qsMinusRevA;
 
+    // VCM (η > 0): merges at the interior vertices next to the connection, (‡) of bdpt_mis.h. The
+    // connection's ends scatter through a non-delta lobe; y0, the lens and a camera end that is
+    // the light's own point (s = 0) are no interior vertices.
+    if (eta > 0.0) {
+        y.endMerges = s >= 2;
+        y.nextMerges = s >= 3 && !light[size_t(s - 2)].delta;
+        z.endMerges = s >= 1 && t >= 2;
+        z.nextMerges = t >= 3 && !camera[size_t(t - 2)].delta;
+    }
     float nee = 1.f;  // p_NEE / p_origin of x0 given x1, for the strategy s = 1 of this path
     if (s > 0) nee = neeOverOriginA(ctx, s == 1 ? *qs : light[0], s == 1 ? *pt : light[1]);
     else if (t >= 2) nee = neeOverOriginA(ctx, *pt, camera[size_t(t - 2)]);
-    return bdptMisWeightFromEnds(y, z, lightIsDelta, heuristic, nee);
+    return bdptMisWeightFromEnds(y, z, lightIsDelta, heuristic, nee, eta);
 }
 
 namespace {
@@ -151,19 +170,19 @@ namespace {
 
 /// s = 0: the camera sub-path found an emitter at z(t−1): C = α_E · Le (Veach eq. 10.8 with s = 0).
 ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const PathVertex> camera, int t, MisHeuristic heuristic,
-                                   bool computeWeight) {
+                                   bool computeWeight, double eta) {
     const PathVertex& pt = camera[size_t(t - 1)];
     ConnectionResult r;
     r.L = pt.beta * emittedAt(ctx, pt);
     if (isBlack(r.L)) return ConnectionResult{};
-    r.weight = computeWeight ? bdptStrategyWeight(ctx, {}, camera, 0, t, nullptr, &pt, heuristic) : 1.f;
+    r.weight = computeWeight ? bdptStrategyWeight(ctx, {}, camera, 0, t, nullptr, &pt, heuristic, eta) : 1.f;
     return r;
 }
 
 /// t = 1 (light tracing): y(s−1) joined to a resampled lens point; the contribution lands on
 /// another pixel.
 [[gnu::always_inline]] inline ConnectionResult connectLens(const RenderContext& ctx, std::span<const PathVertex> light, int s, Sampler& sampler,
-                             MisHeuristic heuristic, bool computeWeight) {
+                             MisHeuristic heuristic, bool computeWeight, double eta) {
     ConnectionResult r;
     if (size_t(s) > light.size()) return r;
     const PathVertex& qs = light[size_t(s - 1)];
@@ -205,7 +224,7 @@ ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const Pat
         } else {
             d = connectionDensities(ctx, light, {&lens, 1}, s, 1, &qs, &lens);
         }
-        r.weight = bdptStrategyWeight(ctx, light, {&lens, 1}, s, 1, &qs, &lens, d, heuristic);
+        r.weight = bdptStrategyWeight(ctx, light, {&lens, 1}, s, 1, &qs, &lens, d, heuristic, eta);
     }
     return r;
 }
@@ -213,7 +232,7 @@ ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const Pat
 /// s = 1 (next-event estimation): a light point resampled from z(t−1), exactly as ptnee samples it
 /// (integrators/next_event.h).
 [[gnu::always_inline]] inline ConnectionResult connectLight(const RenderContext& ctx, std::span<const PathVertex> camera, int t, Sampler& sampler,
-                              MisHeuristic heuristic, bool computeWeight) {
+                              MisHeuristic heuristic, bool computeWeight, double eta) {
     ConnectionResult r;
     const PathVertex& pt = camera[size_t(t - 1)];
     NextEventSample ne;
@@ -246,7 +265,7 @@ ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const Pat
         ConnectionDensities d;
         pdfLightBothA(ctx, y0, pt, d.qsOriginA, d.ptRevA);
         pdfBothWaysA(ctx, bsdf, camera[size_t(t - 2)], pt, y0, d.qsRevA, d.ptMinusRevA);
-        r.weight = bdptStrategyWeight(ctx, {}, camera, 1, t, &y0, &pt, d, heuristic);
+        r.weight = bdptStrategyWeight(ctx, {}, camera, 1, t, &y0, &pt, d, heuristic, eta);
     }
     return r;
 }
@@ -254,7 +273,7 @@ ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const Pat
 /// General connection (Veach eq. 10.8): α_L · f(y(s−1)) · G · f(z(t−1)) · α_E, both ends surfaces
 /// (s ≥ 2 and t ≥ 2: every vertex after a sub-path's first is one).
 [[gnu::always_inline]] inline ConnectionResult connectVertices(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
-                                 int s, int t, MisHeuristic heuristic, bool computeWeight) {
+                                 int s, int t, MisHeuristic heuristic, bool computeWeight, double eta) {
     ConnectionResult r;
     const PathVertex& qs = light[size_t(s - 1)];
     const PathVertex& pt = camera[size_t(t - 1)];
@@ -279,7 +298,7 @@ ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const Pat
         ConnectionDensities d;
         pdfBothWaysA(ctx, bsdfQs, light[size_t(s - 2)], qs, pt, d.ptRevA, d.qsMinusRevA);
         pdfBothWaysA(ctx, bsdfPt, camera[size_t(t - 2)], pt, qs, d.qsRevA, d.ptMinusRevA);
-        r.weight = bdptStrategyWeight(ctx, light, camera, s, t, &qs, &pt, d, heuristic);
+        r.weight = bdptStrategyWeight(ctx, light, camera, s, t, &qs, &pt, d, heuristic, eta);
     }
     return r;
 }
@@ -287,15 +306,15 @@ ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const Pat
 }  // namespace
 
 ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
-                             int s, int t, Sampler& sampler, MisHeuristic heuristic, bool computeWeight) {
+                             int s, int t, Sampler& sampler, MisHeuristic heuristic, bool computeWeight, double eta) {
     if (t < 1 || s + t < 2) return {};
-    if (s == 0) return connectEmitterHit(ctx, camera, t, heuristic, computeWeight);
+    if (s == 0) return connectEmitterHit(ctx, camera, t, heuristic, computeWeight, eta);
     // Only the resampling strategies draw numbers: each from its own block of the sampler.
     if (s == 1 || t == 1) sampler.startConnection(s, t);
-    if (t == 1) return connectLens(ctx, light, s, sampler, heuristic, computeWeight);
+    if (t == 1) return connectLens(ctx, light, s, sampler, heuristic, computeWeight, eta);
     // For s = 1 the light point is resampled: the light sub-path may even be empty.
-    if (s == 1) return connectLight(ctx, camera.first(size_t(t)), t, sampler, heuristic, computeWeight);
-    return connectVertices(ctx, light, camera, s, t, heuristic, computeWeight);
+    if (s == 1) return connectLight(ctx, camera.first(size_t(t)), t, sampler, heuristic, computeWeight, eta);
+    return connectVertices(ctx, light, camera, s, t, heuristic, computeWeight, eta);
 }
 
 }  // namespace tessera

@@ -22,14 +22,21 @@ struct ConnectionResult {
 
 /// Evaluates strategy (s, t) on the given sub-paths (s ≤ light.size(), 1 ≤ t ≤ camera.size(),
 /// s + t ≥ 2). Draws random numbers only for s = 1 (light point) and t = 1 (lens point). With
-/// `computeWeight` false the weight is left at 1 (light tracing uses t = 1 alone).
+/// `computeWeight` false the weight is left at 1 (light tracing uses t = 1 alone). `eta` > 0: VCM's
+/// weight, merging strategies included (bdpt_mis.h's (‡); η = N π r²).
 ConnectionResult connectBdpt(const RenderContext& ctx, std::span<const PathVertex> light,
                              std::span<const PathVertex> camera, int s, int t, Sampler& sampler,
-                             MisHeuristic heuristic, bool computeWeight = true);
+                             MisHeuristic heuristic, bool computeWeight = true, double eta = 0.0);
 
 /// Fills PathVertex::misPrefix along both sub-paths (bdpt_mis.h's M_j): once per sample, after
 /// both walks, before any weight of the sample is computed; O(s + t), so that every weight is O(1).
-void bdptMisPrefixes(const RenderContext& ctx, std::span<PathVertex> light, std::span<PathVertex> camera, MisHeuristic heuristic);
+/// `eta` > 0 adds VCM's merging strategies (bdpt_mis.h's (‡)).
+void bdptMisPrefixes(const RenderContext& ctx, std::span<PathVertex> light, std::span<PathVertex> camera, MisHeuristic heuristic,
+                     double eta = 0.0);
+
+/// g_1 of bdpt_mis.h's (†) for a light sub-path y0 y1 …: strategy s = 1's density ratio at y0
+/// given y1, to the power β (1 when the sub-path has fewer than two vertices).
+double bdptLightNeeFactor(const RenderContext& ctx, std::span<const PathVertex> light, MisHeuristic heuristic);
 
 /// The densities a connection changes (pbrt-v3 §16.3.4's "pdfRev" updates, Veach 1997, §10.2), all
 /// area densities, with y(s−1) = `qs` and z(t−1) = `pt` the endpoints actually used.
@@ -53,9 +60,9 @@ ConnectionDensities connectionDensities(const RenderContext& ctx, std::span<cons
 /// (bdptMisWeightFromEnds; bdptMisPrefixes must have run on the sub-paths).
 float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
                          int s, int t, const PathVertex* qs, const PathVertex* pt, const ConnectionDensities& densities,
-                         MisHeuristic heuristic);
+                         MisHeuristic heuristic, double eta = 0.0);
 /// The same with the densities evaluated by connectionDensities.
 float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
-                         int s, int t, const PathVertex* qs, const PathVertex* pt, MisHeuristic heuristic);
+                         int s, int t, const PathVertex* qs, const PathVertex* pt, MisHeuristic heuristic, double eta = 0.0);
 
 }  // namespace tessera

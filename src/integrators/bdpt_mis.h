@@ -76,9 +76,29 @@ inline double misNeeFactor(float neeOverOriginA, MisHeuristic heuristic) {
     return mis_detail::powBeta(neeOverOriginA > 0.f ? double(neeOverOriginA) : 1.0, heuristic);
 }
 
-/// M_j of (†) from M_(j−1) = `prefixBefore`, the vertex's densities, c_j and g_j.
-inline double misPrefixStep(double prefixBefore, const MisVertex& v, bool connectibleTerm, double g, MisHeuristic heuristic) {
-    return mis_detail::ratioOf(v, heuristic) * ((connectibleTerm ? g : 0.0) + prefixBefore);
+/// Vertex merging (VCM, Georgiev et al. 2012) adds one strategy per interior vertex x_i of a path:
+/// the light sub-path reaches x_i, the camera sub-path ends within the merge radius r of it. Its
+/// density is that of the connection with x_i on the light side times p←(x_i) · η, where
+/// η = N π r² (N light sub-paths per iteration against one connected, the tech report's
+/// η_VCM = n_VM π r² / n_VC, eq. 21). Relative to its neighbours in (†) it adds
+///     μ_j = m_j (η · pdfFwdA_j)^β,   M_j = r_j · (c_j g_j + μ_j + M_(j−1)),                 (‡)
+/// m_j = 1 where the path scatters through a non-delta lobe at v_j and v_j is interior (not y0 or
+/// the lens, not at infinity). η = 0 gives back (†) exactly (bdpt). The tech report's dVM is this
+/// sum's merging part; its eqs. 34–36 are (‡) with the area-conversion factors moved between
+/// vertices.
+inline double misMergeTerm(bool merges, float pdfFwdA, double eta, MisHeuristic heuristic) {
+    return merges && eta > 0.0 ? mis_detail::powBeta(eta * mis_detail::remap0(pdfFwdA), heuristic) : 0.0;
+}
+
+/// The bracket of (‡), c_j g_j + μ_j + M_(j−1): what the strategies at and beyond v_j add before the ratio r_j.
+inline double misPrefixTerm(double prefixBefore, bool connectibleTerm, double g, double mergeTerm) {
+    return (connectibleTerm ? g : 0.0) + mergeTerm + prefixBefore;
+}
+
+/// M_j of (‡) from M_(j−1) = `prefixBefore`, the vertex's densities, c_j, g_j and μ_j.
+inline double misPrefixStep(double prefixBefore, const MisVertex& v, bool connectibleTerm, double g, MisHeuristic heuristic,
+                            double mergeTerm = 0.0) {
+    return mis_detail::ratioOf(v, heuristic) * misPrefixTerm(prefixBefore, connectibleTerm, g, mergeTerm);
 }
 
 /// The last vertices of one sub-path as a strategy's weight needs them: `end` = v(n−1) and
@@ -90,12 +110,15 @@ struct MisEnds {
     MisVertex end, next;
     double prefix = 0.0;
     bool nextPrevDelta = false;
+    /// VCM only (η > 0): m of (‡) for `end` and `next`, whether a merge at them is a strategy of the path.
+    bool endMerges = false, nextMerges = false;
 };
 
 /// bdptMisWeight from the sub-paths' ends: O(1). `light.n` = s, `camera.n` = t. Inline: it runs
-/// once per connection, and inlined into the caller the two MisEnds never leave registers.
+/// once per connection, and inlined into the caller the two MisEnds never leave registers. With
+/// `eta` > 0 the merging strategies of (‡) join the sum (VCM's connection weight, tech report eq. 40).
 inline float bdptMisWeightFromEnds(const MisEnds& light, const MisEnds& camera, bool lightIsDelta, MisHeuristic heuristic,
-                                   float neeOverOriginA = 1.f) {
+                                   float neeOverOriginA = 1.f, double eta = 0.0) {
     using mis_detail::ratioOf;
     const int s = light.n, t = camera.n;
     double sumRatios = 0.0;  // Σ_{i≠s} (p_i / p_s)^β, eq. 10.10
@@ -108,9 +131,11 @@ inline float bdptMisWeightFromEnds(const MisEnds& light, const MisEnds& camera, 
     if (t >= 2) {
         double ratio = ratioOf(camera.end, heuristic);
         if (!camera.end.delta && !camera.next.delta) sumRatios += s == 0 ? ratio * neeFactor : ratio;
+        if (eta > 0.0) sumRatios += ratio * misMergeTerm(camera.endMerges, camera.end.pdfFwdA, eta, heuristic);
         if (t >= 3) {
             ratio *= ratioOf(camera.next, heuristic);
             if (!camera.next.delta && !camera.nextPrevDelta) sumRatios += ratio;
+            if (eta > 0.0) sumRatios += ratio * misMergeTerm(camera.nextMerges, camera.next.pdfFwdA, eta, heuristic);
             sumRatios += ratio * camera.prefix;  // t' ≤ t − 3, eq. (†)
         }
     }
@@ -120,9 +145,11 @@ inline float bdptMisWeightFromEnds(const MisEnds& light, const MisEnds& camera, 
         double ratio = ratioOf(light.end, heuristic);
         bool prevDelta = s >= 2 ? light.next.delta : lightIsDelta;
         if (!light.end.delta && !prevDelta) sumRatios += s - 1 == 1 ? ratio * neeFactor : ratio;
+        if (eta > 0.0) sumRatios += ratio * misMergeTerm(light.endMerges, light.end.pdfFwdA, eta, heuristic);
         if (s >= 2) {
             ratio *= ratioOf(light.next, heuristic);
             if (!light.next.delta && !light.nextPrevDelta) sumRatios += s - 2 == 1 ? ratio * neeFactor : ratio;
+            if (eta > 0.0) sumRatios += ratio * misMergeTerm(light.nextMerges, light.next.pdfFwdA, eta, heuristic);
             sumRatios += ratio * light.prefix;  // s' ≤ s − 3, eq. (†) with g_1 = neeFactor
         }
     }

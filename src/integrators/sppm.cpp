@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
-#include <string>
 
-#include "core/thread_pool.h"
+#include "core/error.h"
 #include "integrators/path_vertex.h"
 #include "integrators/russian_roulette.h"
 #include "integrators/volume.h"
@@ -25,10 +23,8 @@ namespace tessera {
 // added only where the camera reached it through delta scattering alone: every other path to a
 // light is counted by a photon (its direct illumination, j = 1) and must not be counted twice.
 
-float SppmIntegrator::iterationRadius(float radius, float alpha, uint32_t iteration) {
-    double r2 = double(radius) * double(radius);
-    for (uint32_t k = 1; k <= iteration; ++k) r2 *= (double(k) + double(alpha)) / double(k + 1);
-    return float(std::sqrt(r2));
+SppmIntegrator::SppmIntegrator(PhotonSettings settings) : settings_(settings) {
+    if (settings_.radius == 0.f) throw InputError("sppm: --radius 0 leaves no merging, and sppm finds light only by merging");
 }
 
 void SppmIntegrator::preparePass(const RenderContext& ctx, uint32_t firstSample, uint32_t count, uint64_t seed, SamplerKind kind,
@@ -36,56 +32,28 @@ void SppmIntegrator::preparePass(const RenderContext& ctx, uint32_t firstSample,
     // Built anew on every call: the map depends on the seed, the film size and the depth limit as
     // well as the iteration, and one integrator may serve several renders (tessera view).
     if (count == 0) return;
-    iteration_ = firstSample;
-    paths_ = settings_.photons > 0 ? settings_.photons : uint64_t(ctx.camera.width()) * uint64_t(ctx.camera.height());
-    // Default r_1: SmallVCM's 0.003 × the scene's radius at its 512² light sub-paths, grown as
-    // 1/√paths below that so that a query finds about as many photons at any resolution.
-    const float r1 = settings_.radius > 0.f ? settings_.radius
-                                            : 0.003f * ctx.scene.lights().sceneRadius() * float(std::sqrt(std::max(1.0, 262144.0 / double(paths_))));
-    radius_ = iterationRadius(r1, settings_.alpha, firstSample);
-    // Light sub-paths in chunks, each chunk's photons in path order, chunks concatenated in order:
-    // the photon list, and so every query's visiting order, is the same for any thread count.
-    // Path k draws from the sampler of "pixel" (k, −1), a row no camera sample uses.
-    constexpr uint64_t kChunk = 1024;
-    const size_t chunks = size_t((paths_ + kChunk - 1) / kChunk);
-    std::vector<std::vector<Photon>> chunkPhotons(chunks);
-    std::vector<std::vector<Vec3f>> chunkPositions(chunks);
-    const int maxVertices = ctx.maxDepth < 0 ? -1 : ctx.maxDepth + 1;
-    pool.parallelFor(chunks, [&](size_t c) {
-        thread_local std::vector<PathVertex> path;
-        for (uint64_t k = c * kChunk; k < std::min(paths_, (c + 1) * kChunk); ++k) {
-            Sampler sampler(Vec2i(int(k), -1), firstSample, seed, kind);
-            traceLightSubpath(ctx, sampler, maxVertices, path);
-            for (size_t j = 1; j < path.size(); ++j) {
-                const PathVertex& v = path[j];
-                // A vertex whose material has no non-delta lobe reflects nothing a merge can see.
-                if (v.type != VertexType::Surface || isDeltaMaterial(v.bsdf)) continue;
-                chunkPhotons[c].push_back({v.woWorld, v.beta, uint32_t(j)});
-                chunkPositions[c].push_back(v.p);
-            }
-        }
-    });
-    photons_.clear();
-    std::vector<Vec3f> positions;
-    for (size_t c = 0; c < chunks; ++c) {
-        photons_.insert(photons_.end(), chunkPhotons[c].begin(), chunkPhotons[c].end());
-        positions.insert(positions.end(), chunkPositions[c].begin(), chunkPositions[c].end());
-    }
-    grid_.build(positions, radius_, &pool);
+    pass_.prepare(ctx, settings_, firstSample, seed, kind, pool,
+                  [](const std::vector<PathVertex>& path, std::vector<Photon>& photons, std::vector<Vec3f>& positions) {
+                      for (size_t j = 1; j < path.size(); ++j) {
+                          const PathVertex& v = path[j];
+                          // A vertex whose material has no non-delta lobe reflects nothing a merge can see.
+                          if (v.type != VertexType::Surface || isDeltaMaterial(v.bsdf)) continue;
+                          photons.push_back({v.woWorld, v.beta, uint32_t(j)});
+                          positions.push_back(v.p);
+                      }
+                  });
 }
 
 Rgb SppmIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& sampler, SplatSink&) const {
-    // Without its iteration's photons (a sample outside the pass preparePass made) the estimate
-    // would silently use another iteration's: refuse loudly instead.
-    if (sampler.sampleIndex() != iteration_)
-        throw std::logic_error("sppm: sample index " + std::to_string(sampler.sampleIndex()) + " rendered without its photon map");
+    pass_.requireIteration(sampler, "sppm");
     const Scene& scene = ctx.scene;
     Ray ray = ctx.camera.generateRay(raster, sampler.get2D());
     Rgb L(0.f), beta(1.f);
     float rrScale = 1.f;
     Rgb sigmaLeave(0.f);
     Vec3f prevP = ray.o;
-    const float mergeNorm = 1.f / (float(paths_) * kPi * radius_ * radius_);
+    const float radius = pass_.radius;
+    const float mergeNorm = 1.f / (float(pass_.paths) * kPi * radius * radius);
     for (int depth = 0;; ++depth) {
         Hit hit;
         if (!(depth == 0 ? ctx.accel.intersectCoherent(ray, hit) : ctx.accel.intersect(ray, hit))) {
@@ -107,8 +75,8 @@ Rgb SppmIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
         if (!bsdf.isDelta()) {
             // Merge: the photons within r_i, with paths of at most maxDepth bounces (j + t − 1).
             Rgb sum(0.f);
-            grid_.forEachWithin(si.p, radius_, [&](uint32_t i) {
-                const Photon& ph = photons_[i];
+            pass_.grid.forEachWithin(si.p, radius, [&](uint32_t i) {
+                const Photon& ph = pass_.photons[i];
                 if (ctx.maxDepth >= 0 && int(ph.depth) + t - 1 > ctx.maxDepth) return;
                 sum += bsdf.eval(wo, ph.wi, TransportMode::Radiance) * ph.power;
             });

@@ -24,10 +24,10 @@ struct RenderSettings {
     uint64_t seed = 0;
     SamplerKind sampler = kDefaultSampler;  ///< --sampler (core/sampler.h)
     std::string integrator = "ptnee";
-    // Photon mapping (`sppm`, integrators/sppm.h): initial radius in scene units (≤ 0: chosen from
-    // the scene's size and the photon count), Knaus & Zwicker's α, light sub-paths per iteration
-    // (0: one per pixel).
-    float photonRadius = 0.f;
+    // Photon mapping (`sppm`, `vcm`; integrators/photon_pass.h): initial radius in scene units
+    // (< 0: chosen from the scene's size and the photon count; 0: no merging), Knaus & Zwicker's α,
+    // light sub-paths per iteration (0: one per pixel).
+    float photonRadius = -1.f;
     float photonAlpha = 0.75f;
     uint64_t photonPaths = 0;
 };
