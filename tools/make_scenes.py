@@ -135,6 +135,7 @@ SCENE_LIST = [
     ("tiny-light", "tiny-light-100", lambda: cornell_box(light_area_divisor=100), True),
     ("door-ajar", "door-ajar", door_ajar, True),
     ("sds-caustic", "sds-caustic", sds_caustic, True),
+    ("sds-caustic", "point-caustic-mirror", lambda: sds_caustic(point_light=True), True),
     ("point-light-specular", "point-light-specular", point_light_specular, True),
     ("furnace", "furnace", furnace, False),
     ("webxr", "webxr-controllers", webxr_controllers, True),

@@ -415,21 +415,32 @@ def door_ajar():
     return g
 
 
-def sds_caustic():
-    g = Gltf("A glass sphere focuses a small sphere light onto a diffuse floor that the camera sees "
-             "only in a 45-degree mirror: the caustic is an SDS path (light, glass, floor, mirror).")
+def sds_caustic(point_light=False):
+    if point_light:
+        g = Gltf("sds-caustic with a point light (about the sphere light's power) and a perfect mirror "
+                 "(reflectance 1): the caustic seen in the mirror (point light, glass, floor, mirror) is "
+                 "a path no unbiased method samples at all; only photon mapping (sppm, vcm) renders it.")
+    else:
+        g = Gltf("A glass sphere focuses a small sphere light onto a diffuse floor that the camera sees "
+                 "only in a 45-degree mirror: the caustic is an SDS path (light, glass, floor, mirror).")
     floor = g.material("floor", base=(0.8, 0.8, 0.8), specular=0.0)
     glass = g.material("glass", base=(1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
                        transmission=1.0, ior=1.5, thickness=1.0)
-    mirror = g.material("mirror", base=(0.95, 0.95, 0.95), metallic=1.0, roughness=0.0)
-    light = g.material("light", emission=((1.0, 0.95, 0.85), 900.0), specular=0.0)
+    reflectance = 1.0 if point_light else 0.95
+    mirror = g.material("mirror", base=(reflectance,) * 3, metallic=1.0, roughness=0.0)
+    if not point_light:
+        light = g.material("light", emission=((1.0, 0.95, 0.85), 900.0), specular=0.0)
     g.quads("floor", [floor_quad(4.0)[0]], lambda q: (0.0, 1.0, 0.0), floor)
     g.sphere("glass sphere", (0.0, 0.9, 0.0), 0.5, glass)
     # The light sits behind the mirror's plane (z < y - 4) and below its lower edge (y 2.44), so it
     # lights the floor and the sphere directly but never the mirror's front: otherwise the mirror
     # would also relay it onto the whole floor (light, mirror, floor, mirror: only s = 0 again) and
     # bury the glass caustic in fireflies.
-    g.sphere("light", (-2.0, 2.4, -2.9), 0.12, light)
+    if point_light:
+        # 40 W/sr: about the sphere light's 900 x pi x 4 pi 0.12^2 / (4 pi) W/sr.
+        g.point_light("point light", (-2.0, 2.4, -2.9), (1.0, 0.95, 0.85), 40.0)
+    else:
+        g.sphere("light", (-2.0, 2.4, -2.9), 0.12, light)
     # Mirror centred at (0, 4, 0) facing the camera and the floor: normal (0, -1, 1)/sqrt 2, so a
     # camera ray along -z turns to -y (looking straight down onto the floor).
     n = normalize((0.0, -1.0, 1.0))

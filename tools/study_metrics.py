@@ -31,6 +31,9 @@ SLOPE_PLATEAU = -0.4       # flatter than this without a mean bias: the error st
 SLOW_FACTOR = 10.0         # relMSE x seconds at least 10x the scene's best unbiased method: slow
 FIREFLY_FACTOR = 5.0       # test firefly share over 5x the reference's: fireflies dominate the error
 SEED_SPREAD = 3.0          # relMSE max/min over the seeds of the largest budget: heavy tails
+# Consistent, not unbiased (biased at any finite time, the bias shrinking with the merge radius):
+# their verdict carries "(consistent)" and they are never the scene's best *unbiased* method.
+CONSISTENT = ("sppm", "vcm")
 
 
 def image_mean(rgb):
@@ -131,11 +134,21 @@ def verdict_rules():
         f"scene, or a firefly share over {FIREFLY_FACTOR:g}x the reference's: **converges slowly**.\n"
         f"5. Otherwise (slope {SLOPE_CONVERGES:g} or steeper, ideal -1, and within {SLOW_FACTOR:g}x of "
         "the best): **converges**.\n"
+        f"Photon-mapping integrators ({', '.join(CONSISTENT)}) are consistent, not unbiased: biased at any "
+        "finite time by their merge kernel, the bias shrinking as the radius does (their slope tends to "
+        "-alpha = -0.75 while variance dominates, -0.5 once the squared bias does). The same rules apply "
+        "and their verdict says **(consistent)**; they are not counted as the scene's best unbiased "
+        "method.\n"
     )
 
 
 def verdict(row, best_work):
     """The verdict for one summary row (a dict from summarise()), by verdict_rules()."""
+    v = _unlabelled_verdict(row, best_work)
+    return f"{v} (consistent)" if row.get("integrator") in CONSISTENT else v
+
+
+def _unlabelled_verdict(row, best_work):
     if row["nonfinite_samples"] > 0 or row["nonfinite_pixels"] > 0:
         return "NaN"
     bias, se, ref_mean = row["bias"], row["bias_se"], row["ref_mean"]

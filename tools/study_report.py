@@ -63,7 +63,7 @@ def _series_plot(ax, runs_by_key, floor, title, labels=None):
         y = [p[2] for p in pts]
         # max(0, ·): the mean of equal values can round one ulp below their minimum.
         err = [[max(0.0, p[2] - p[3]) for p in pts], [max(0.0, p[4] - p[2]) for p in pts]]
-        biased = labels and labels.get(key) in ("misses paths", "biased", "NaN")
+        biased = labels and (labels.get(key) or "").split(" (")[0] in ("misses paths", "biased", "NaN")
         ax.errorbar(x, y, yerr=err, marker="o", ms=3, lw=1.2, capsize=2, ls="--" if biased else "-",
                     label=f"{key}: {labels[key]}" if labels and key in labels else key, color=COLOURS.get(key))
     if floor > 0:
