@@ -402,7 +402,7 @@ Runner addViewCommand(CLI::App& app) {
         ->check(CLI::Range(0.001, 1e6));
     cmd->footer("Keys: W/A/S/D move, Q/E or Ctrl/Space down/up, Shift 4x faster, mouse looks (captured; Escape\n"
                 "releases it, a click captures it again). P saves EXR+PNG, C prints the camera as render options,\n"
-                "R restarts, 1-6 switch integrator (" + commaSeparated(integratorNames()) + "). Closing the window quits.");
+                "R restarts, 1-9 switch integrator (" + commaSeparated(integratorNames()) + "). Closing the window quits.");
     return [a] { return runView(*a); };
 }
 
