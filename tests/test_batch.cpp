@@ -81,12 +81,13 @@ TEST(Batch, BadJobAndMissingSceneAreReportedAndTheGoodImagesMatchRender) {
            {"sampler", "independent"},
            {"max-depth", 3},
            {"camera", {{"look-at", {{0.278, 0.273, -0.6}, {0.25, 0.3, 0.0}, {0, 1, 0}}}, {"fov", 45}}},
-           {"output", "out/good-lookat.exr"}}}},
+           {"output", "out/good-lookat.exr"}},
+          {{"name", "good-vcm"}, {"integrator", "vcm"}, {"radius", 0.05}, {"alpha", 0.6}, {"photons", 500}, {"output", "good-vcm.exr"}}}},
     };
     CliRun run;
     json summary = batch(writeJobs(dir, jobs), dir, 1, &run);
-    ASSERT_EQ(summary["jobs"].size(), 4u);
-    EXPECT_EQ(summary["ok"], 2);
+    ASSERT_EQ(summary["jobs"].size(), 5u);
+    EXPECT_EQ(summary["ok"], 3);
     EXPECT_EQ(summary["failed"], 2);
     const json& j = summary["jobs"];
     EXPECT_EQ(j[0]["status"], "ok");
@@ -123,6 +124,13 @@ TEST(Batch, BadJobAndMissingSceneAreReportedAndTheGoodImagesMatchRender) {
                   .code,
               0);
     expectSameImage(dir / "out/good-lookat.exr", dir / "ref-lookat.exr");
+    // Photon settings reach the integrator as render's --radius, --alpha and --photons.
+    ASSERT_EQ(runTessera("render '" + kBox + "'" + common + " --no-png --integrator vcm --radius 0.05 --alpha 0.6 --photons 500 -o '" +
+                          (dir / "ref-vcm.exr").string() + "'",
+                      dir)
+                  .code,
+              0);
+    expectSameImage(dir / "good-vcm.exr", dir / "ref-vcm.exr");
 }
 
 TEST(Batch, SceneLoadedOnceAndStructureBuiltOncePerKind) {
@@ -254,6 +262,9 @@ TEST(Batch, MalformedJobsFileIsOneLineNamingThePointer) {
         {"{\"jobs\": [{" + s + ", \"time\": 0}]}", "/jobs/0/time: must be a number > 0"},
         {"{\"jobs\": [{" + s + ", \"seed\": 18446744073709551615}]}", "/jobs/0/seed: must be an integer"},
         {"{\"jobs\": [{" + s + ", \"max-depth\": -2}]}", "/jobs/0/max-depth: must be an integer in [-1,"},
+        {"{\"jobs\": [{" + s + ", \"alpha\": 1.5}]}", "/jobs/0/alpha: must be a number"},
+        {"{\"jobs\": [{" + s + ", \"photons\": 0}]}", "/jobs/0/photons: must be an integer in [1,"},
+        {"{\"jobs\": [{" + s + ", \"spp\": 0}]}", "/jobs/0/spp: must be an integer in [1, 1073741824], got 0"},
         {"{\"jobs\": [{" + s + ", \"camera\": {\"look-at\": [[0,0,0], [1,\"a\",0]]}}]}", "/jobs/0/camera/look-at/1/1: must be a number"},
         {"{\"jobs\": [{" + s + ", \"camera\": {\"name\": \"a\", \"index\": 1}}]}", "/jobs/0/camera: give one of"},
         {"{\"jobs\": [{" + s + ", \"camera\": {\"fov\": 200}}]}", "/jobs/0/camera/fov: must be a number"},

@@ -192,6 +192,27 @@ def study_scene(args, tess, ref, tmp, integrators, accels):
     return {"runs": study.runs, "summary": summary, "floor": study.floor, "failures": study.failures, "notes": notes}
 
 
+def add_missing_series(args, tess, ref, tmp, integrators, part, cache_path):
+    """--add-integrators: renders the series of the integrators a cached scene lacks and adds them to
+    its rows (the verdicts are recomputed with every row of the scene afterwards)."""
+    have = {s["integrator"] for s in part["summary"] if s["accel"] == DEFAULT_ACCEL}
+    missing = [i for i in integrators if i not in have]
+    if not missing:
+        return
+    t0 = time.time()
+    study = SceneStudy(args, tess, ref, tmp)
+    study.seed_counter = max((r["seed"] for r in part["runs"]), default=0)  # seeds of their own
+    log(f"study: {ref.name}: adding {', '.join(missing)} to the cached rows")
+    for integrator in missing:
+        study.series(integrator, DEFAULT_ACCEL)
+    part["runs"] += study.runs
+    part["summary"] += [s for s in (summarise(study, *k) for k in study.pooled) if s]
+    part["failures"] += study.failures
+    part["minutes"] = part.get("minutes", 0.0) + (time.time() - t0) / 60
+    with open(cache_path, "w") as f:
+        json.dump(part, f)
+
+
 def mask_note(name, mask):
     return (f"{name}: judged on the {100 * mask.mean():.1f}% of pixels that refs/{name}-mask.exr keeps (no mirror "
             f"or glass seen directly): every render and the reference are zeroed elsewhere before any metric.")
@@ -307,6 +328,8 @@ def run(args, tess, refs, notes, argv):
             if cached:
                 log(f"study: {ref.name}: reusing {cache_path} (same reference, scene and settings)")
                 part = cached
+                if args.add_integrators:
+                    add_missing_series(args, tess, ref, tmp, integrators, part, cache_path)
             elif args.only_cached:
                 notes.append(f"{ref.name}: has a reference but was not studied (no cached results).")
                 log(f"study: {ref.name}: no cached results: left out (--only-cached)")

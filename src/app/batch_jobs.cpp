@@ -144,7 +144,9 @@ private:
     int64_t integer(const json& v, const std::string& ptr, int64_t lo, int64_t hi) const {
         std::string range = "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
         if (!v.is_number_integer()) fail(ptr, "must be " + range);
-        if (v.is_number_unsigned() ? v.get<uint64_t>() > uint64_t(hi) : (v.get<int64_t>() < lo || v.get<int64_t>() > hi))
+        // Non-negative literals parse as unsigned: both bounds apply to them too ("spp": 0).
+        if (v.is_number_unsigned() ? (v.get<uint64_t>() > uint64_t(hi) || (lo > 0 && v.get<uint64_t>() < uint64_t(lo)))
+                                   : (v.get<int64_t>() < lo || v.get<int64_t>() > hi))
             fail(ptr, "must be " + range + ", got " + v.dump());
         return v.get<int64_t>();
     }
@@ -243,6 +245,12 @@ private:
                 r.seed = integer(v, p, 0, INT64_MAX);
             } else if (key == "max-depth") {
                 r.maxDepth = int(integer(v, p, -1, 1 << 20));
+            } else if (key == "radius") {  // sppm, vcm: as render's --radius, --alpha, --photons
+                r.photonRadius = float(number(v, p, 0.0, 1e30));
+            } else if (key == "alpha") {
+                r.photonAlpha = float(number(v, p, 0.01, 0.999));
+            } else if (key == "photons") {
+                r.photonPaths = uint64_t(integer(v, p, 1, int64_t(1) << 32));
             } else if (key == "output") {
                 if (!isJob) fail(p, "an output belongs to one job, not to the defaults");
                 r.output = pathValue(v, p);
@@ -272,7 +280,8 @@ private:
                 r.maxMemoryGiB = number(v, p, 0.001, 1e6);
             } else {
                 fail(p, "unknown key (expected name, scene, camera, integrator, accel, sampler, spp, time, resolution, seed, "
-                        "max-depth, output, png, display, view, env, env-rotate, env-intensity, allow-external-files, max-memory)");
+                        "max-depth, radius, alpha, photons, output, png, display, view, env, env-rotate, env-intensity, "
+                        "allow-external-files, max-memory)");
             }
         }
     }

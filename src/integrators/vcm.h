@@ -48,7 +48,8 @@ public:
     Rgb sample(const RenderContext& ctx, Vec2i pixel, Vec2f raster, Sampler& sampler, SplatSink& splats) const override;
     void preparePass(const RenderContext& ctx, uint32_t firstSample, uint32_t count, uint64_t seed, SamplerKind kind,
                      ThreadPool& pool) const override;
-    uint32_t maxPassSamples() const override { return 1; }
+    /// One iteration per pass; without merging (radius 0) passes of any size, as bdpt's.
+    uint32_t maxPassSamples() const override { return photons_.radius == 0.f ? 0 : 1; }
 
 private:
     PhotonSettings photons_;
