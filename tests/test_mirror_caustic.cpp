@@ -117,7 +117,7 @@ double regionSum(const std::vector<double>& image, const std::vector<bool>& regi
     return s;
 }
 
-std::vector<double> renderLuminance(const Scene& scene, const Integrator& integrator, int spp, uint64_t seed) {
+std::vector<double> renderMirrorLuminance(const Scene& scene, const Integrator& integrator, int spp, uint64_t seed) {
     auto accel = createAccel("embree", scene.geometry);
     test::TestRender r = test::renderScene(scene, *accel, integrator, kW, kH, RenderOptions{.spp = spp, .threads = 2, .seed = seed});
     EXPECT_EQ(r.stats.nonFiniteDropped, 0u);
@@ -169,12 +169,12 @@ TEST(MirrorCaustic, OnlyPhotonMappingSeesAPointLightsCausticInAMirror) {
     settings.photonPaths = 65536;
     for (const char* name : {"sppm", "vcm"}) {
         settings.integrator = name;
-        double got = regionSum(renderLuminance(scene, *createIntegrator(settings), 64, 3), region);
+        double got = regionSum(renderMirrorLuminance(scene, *createIntegrator(settings), 64, 3), region);
         std::cout << name << ": " << got << " (" << (got / expected - 1.0) * 100.0 << "%)\n";
         EXPECT_NEAR(got, expected, 0.08 * expected) << name;
     }
     for (const char* name : {"pt", "ptnee", "lt", "bdpt"}) {
-        double got = regionSum(renderLuminance(scene, *createIntegrator(name), 16, 3), region);
+        double got = regionSum(renderMirrorLuminance(scene, *createIntegrator(name), 16, 3), region);
         std::cout << name << ": " << got << " (" << (got / expected - 1.0) * 100.0 << "%)\n";
         EXPECT_LT(got, 0.1 * expected) << name << " cannot sample the caustic: it must not be there";
     }

@@ -328,7 +328,7 @@ def run(args, tess, refs, notes, argv):
             if cached:
                 log(f"study: {ref.name}: reusing {cache_path} (same reference, scene and settings)")
                 part = cached
-                if args.add_integrators:
+                if args.add_integrators and not args.only_cached:
                     add_missing_series(args, tess, ref, tmp, integrators, part, cache_path)
             elif args.only_cached:
                 notes.append(f"{ref.name}: has a reference but was not studied (no cached results).")

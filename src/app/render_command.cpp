@@ -137,7 +137,8 @@ Runner addRenderCommand(CLI::App& app) {
                     "also write one EXR per BDPT strategy (s,t), weighted and unweighted, into this directory "
                     "(paths up to --max-depth + 2 vertices, 5 if unlimited; one extra render per image)");
     cmd->add_option("--radius", a->photonRadius, "sppm, vcm: initial merge radius in scene units (default: 0.003 x the scene's radius, "
-                    "grown as 1/sqrt(photons) below 512^2 photons; vcm: 0 = no merging, i.e. bdpt)")->check(CLI::NonNegativeNumber);
+                    "grown as 1/sqrt(photons) below 512^2 photons, at most a pixel's footprint at the median depth seen; "
+                    "vcm: 0 = no merging, i.e. bdpt)")->check(CLI::NonNegativeNumber);
     cmd->add_option("--alpha", a->photonAlpha, "sppm, vcm: radius reduction, r_{i+1}^2 = r_i^2 (i + alpha)/(i + 1) (default: 0.75)")
         ->check(CLI::Range(0.01, 0.999));
     cmd->add_option("--photons", a->photonPaths, "sppm, vcm: light sub-paths per iteration (default: one per pixel)")->check(CLI::Range(uint64_t(1), uint64_t(1) << 32));

@@ -18,9 +18,8 @@
 namespace tessera {
 
 struct PhotonSettings {
-    /// r_1 in scene units; < 0: 0.003 × the radius of the scene's bounding sphere (SmallVCM's
-    /// default radius factor) × √(512² / photons) where there are fewer photons than that. 0: no
-    /// merging (vcm: its connections alone, i.e. bdpt; sppm refuses it).
+    /// r_1 in scene units; < 0: defaultMergeRadius. 0: no merging (vcm: its connections alone,
+    /// i.e. bdpt; sppm refuses it).
     float radius = -1.f;
     float alpha = 0.75f;   ///< KZ11's α ∈ (0, 1): how fast the radius shrinks
     uint64_t photons = 0;  ///< light sub-paths per iteration; 0: one per pixel (as SmallVCM)
@@ -29,6 +28,15 @@ struct PhotonSettings {
 /// r_i of iteration i (sample index i, from 0): r_0 = `radius`, then Knaus & Zwicker 2011's global
 /// sequence r_(i+1)² = r_i² (i + α)/(i + 1) (their eq. 20, i counted from 1).
 float photonIterationRadius(float radius, float alpha, uint32_t iteration);
+
+/// The default r_1 for `paths` light sub-paths per iteration: SmallVCM's 0.003 × the radius of the
+/// scene's bounding sphere at its 512² paths, grown as √(512² / paths) below that so that a query
+/// finds about as many photons at any resolution; but never more than one pixel's footprint at the
+/// median depth the camera sees (16 × 16 rays through the film), grown as √(pixels / paths). The
+/// cap matters where the bounding sphere says nothing about what is seen: smallpt-style walls that
+/// are spheres of radius 10⁵ made SmallVCM's rule merge over the whole room (sphere-cornell: r ≈ 700
+/// in a box of 100, images 28× too bright at 4 iterations). A function of the scene and camera alone.
+float defaultMergeRadius(const RenderContext& ctx, uint64_t paths);
 
 /// One iteration's photons and their grid. Written by prepare() between passes only, read by the
 /// samples of the pass (the scheduler's pool orders the two).
@@ -50,11 +58,7 @@ struct IterationPhotons {
                  ThreadPool& pool, Deposit&& deposit) {
         iteration = firstSample;
         paths = settings.photons > 0 ? settings.photons : uint64_t(ctx.camera.width()) * uint64_t(ctx.camera.height());
-        // Default r_1: SmallVCM's 0.003 × the scene's radius at its 512² light sub-paths, grown as
-        // 1/√paths below that so that a query finds about as many photons at any resolution.
-        const float r1 = settings.radius >= 0.f
-                             ? settings.radius
-                             : 0.003f * ctx.scene.lights().sceneRadius() * float(std::sqrt(std::max(1.0, 262144.0 / double(paths))));
+        const float r1 = settings.radius >= 0.f ? settings.radius : defaultMergeRadius(ctx, paths);
         radius = photonIterationRadius(r1, settings.alpha, firstSample);
         photons.clear();
         if (!(radius > 0.f)) return;
