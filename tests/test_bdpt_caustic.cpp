@@ -179,13 +179,7 @@ namespace {
 std::vector<double> luminance(const Scene& scene, const char* integrator, int w, int h, int spp, uint64_t seed) {
     test::TestRender r = test::renderScene(scene, integrator, w, h, RenderOptions{.spp = spp, .seed = seed});
     EXPECT_EQ(r.stats.nonFiniteDropped, 0u);
-    std::vector<double> y(size_t(w) * size_t(h));
-    for (int j = 0; j < h; ++j)
-        for (int i = 0; i < w; ++i) {
-            Rgb p = r.film.pixel(i, j);
-            y[size_t(j) * size_t(w) + size_t(i)] = 0.2126 * p.r + 0.7152 * p.g + 0.0722 * p.b;
-        }
-    return y;
+    return test::filmLuminance(r.film);
 }
 
 /// relMSE (tools/study_metrics.py's: (x − r)² / (r² + 0.01)) over the pixels of `mask`.

@@ -108,6 +108,15 @@ inline TriangleMesh makeUvSphereMesh(Vec3f center, float radius, int rings, int 
     return m;
 }
 
+/// Per-pixel luminance (Rec. 709, core/math.h's luminance) of a film, row by row: what the
+/// statistical tests compare when one number per pixel is enough.
+inline std::vector<double> filmLuminance(const Film& film) {
+    std::vector<double> y(size_t(film.width()) * size_t(film.height()));
+    for (int j = 0; j < film.height(); ++j)
+        for (int i = 0; i < film.width(); ++i) y[size_t(j) * size_t(film.width()) + size_t(i)] = luminance(film.pixel(i, j));
+    return y;
+}
+
 /// Mean over pixels and its standard error (pixels are independent estimates of the same value).
 inline void pixelMean(const Film& film, double mean[3], double se[3]) {
     double n = double(film.width()) * film.height();

@@ -101,7 +101,7 @@ std::vector<std::vector<double>> histogramEstimate(const RenderContext& ctx, con
                 if (!ctx.camera.sampleIncoming(reflectAcrossMirror(v.p), Vec2f(0.5f), cs)) continue;
                 int x = int(cs.raster.x), y = int(cs.raster.y);
                 if (x < 0 || y < 0 || x >= kW || y >= kH || fp.area[size_t(y * kW + x)] <= 0.0) continue;
-                double flux = 0.2126 * v.beta.r + 0.7152 * v.beta.g + 0.0722 * v.beta.b;
+                double flux = luminance(v.beta);
                 sum[size_t(y * kW + x)] += kFloorAlbedo / kPi * flux / fp.area[size_t(y * kW + x)];
             }
         }
@@ -121,13 +121,7 @@ std::vector<double> renderMirrorLuminance(const Scene& scene, const Integrator& 
     auto accel = createAccel("embree", scene.geometry);
     test::TestRender r = test::renderScene(scene, *accel, integrator, kW, kH, RenderOptions{.spp = spp, .threads = 2, .seed = seed});
     EXPECT_EQ(r.stats.nonFiniteDropped, 0u);
-    std::vector<double> y(size_t(kW * kH));
-    for (int j = 0; j < kH; ++j)
-        for (int i = 0; i < kW; ++i) {
-            Rgb p = r.film.pixel(i, j);
-            y[size_t(j * kW + i)] = 0.2126 * p.r + 0.7152 * p.g + 0.0722 * p.b;
-        }
-    return y;
+    return test::filmLuminance(r.film);
 }
 
 }  // namespace

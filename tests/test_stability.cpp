@@ -30,14 +30,7 @@ Film renderFilm(const Scene& scene, const Integrator& integrator, int w, int h, 
 /// Per-pixel luminance (Rec. 709) of a render with the named integrator.
 std::vector<double> renderLuminance(const Scene& scene, const char* name, int w, int h, int spp, uint64_t seed) {
     auto integrator = createIntegrator(name);
-    Film film = renderFilm(scene, *integrator, w, h, spp, seed);
-    std::vector<double> y(size_t(w) * size_t(h));
-    for (int j = 0; j < h; ++j)
-        for (int i = 0; i < w; ++i) {
-            Rgb p = film.pixel(i, j);
-            y[size_t(j) * w + i] = 0.2126 * p.r + 0.7152 * p.g + 0.0722 * p.b;
-        }
-    return y;
+    return test::filmLuminance(renderFilm(scene, *integrator, w, h, spp, seed));
 }
 
 double sum(const std::vector<double>& v) {
@@ -106,27 +99,18 @@ TEST(Stability, SdsCausticComesOnlyFromBdptsUnidirectionalStrategies) {
     BdptSettings s0Only;
     s0Only.onlyS = 0;
     BdptIntegrator bdptS0(s0Only), bdptAll;
-    auto luminance = [&](const Film& f) {
-        std::vector<double> y(size_t(w) * h);
-        for (int j = 0; j < h; ++j)
-            for (int i = 0; i < w; ++i) {
-                Rgb p = f.pixel(i, j);
-                y[size_t(j) * w + i] = 0.2126 * p.r + 0.7152 * p.g + 0.0722 * p.b;
-            }
-        return y;
-    };
     // Selection (seed 1): the glass sphere's shadow on the floor, where the connection strategies
     // (bdpt minus its s = 0 part) see nothing at all. Only light that went through the
     // glass (light -> glass -> floor, then mirror -> camera: SDS) lands there.
-    std::vector<double> allSel = luminance(renderFilm(scene, bdptAll, w, h, 8, 1));
-    std::vector<double> s0Sel = luminance(renderFilm(scene, bdptS0, w, h, 8, 1));
+    std::vector<double> allSel = test::filmLuminance(renderFilm(scene, bdptAll, w, h, 8, 1));
+    std::vector<double> s0Sel = test::filmLuminance(renderFilm(scene, bdptS0, w, h, 8, 1));
     std::vector<bool> sds(allSel.size());
     for (size_t i = 0; i < allSel.size(); ++i) sds[i] = allSel[i] - s0Sel[i] <= 0.0;
     ASSERT_GT(count(sds), 200u) << "no shadow region found";
 
     // Measurement (seed 2 for bdpt, 3 for ptnee, 4 for lt).
-    std::vector<double> all = luminance(renderFilm(scene, bdptAll, w, h, 32, 2));
-    std::vector<double> s0 = luminance(renderFilm(scene, bdptS0, w, h, 32, 2));
+    std::vector<double> all = test::filmLuminance(renderFilm(scene, bdptAll, w, h, 32, 2));
+    std::vector<double> s0 = test::filmLuminance(renderFilm(scene, bdptS0, w, h, 32, 2));
     double eAll = sumOver(all, sds), eS0 = sumOver(s0, sds);
     double eNee = sumOver(renderLuminance(scene, "ptnee", w, h, 32, 3), sds);
     // The shipped light: the enlarged one is in the camera's view.

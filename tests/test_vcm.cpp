@@ -37,7 +37,7 @@ double lumaRelMseAgainst(const Film& film, const io::Image& ref) {
         for (int i = 0; i < ref.width; ++i) {
             Rgb p = film.pixel(i, j);
             const float* r = &ref.rgba[(size_t(j) * size_t(ref.width) + size_t(i)) * 4];
-            double x = 0.2126 * p.r + 0.7152 * p.g + 0.0722 * p.b, y = 0.2126 * r[0] + 0.7152 * r[1] + 0.0722 * r[2];
+            double x = luminance(p), y = luminance(Rgb(r[0], r[1], r[2]));
             sum += (x - y) * (x - y) / (y * y + 0.01);
         }
     return sum / double(ref.width * ref.height);
@@ -45,14 +45,14 @@ double lumaRelMseAgainst(const Film& film, const io::Image& ref) {
 
 double imageMeanLuminance(const io::Image& img) {
     double sum = 0;
-    for (size_t i = 0; i < img.rgba.size(); i += 4) sum += 0.2126 * img.rgba[i] + 0.7152 * img.rgba[i + 1] + 0.0722 * img.rgba[i + 2];
+    for (size_t i = 0; i < img.rgba.size(); i += 4) sum += luminance(Rgb(img.rgba[i], img.rgba[i + 1], img.rgba[i + 2]));
     return sum / double(img.width * img.height);
 }
 
 double filmMeanLuminance(const Film& film) {
     double mean[3], se[3];
     test::pixelMean(film, mean, se);
-    return 0.2126 * mean[0] + 0.7152 * mean[1] + 0.0722 * mean[2];
+    return luminance(Rgb(float(mean[0]), float(mean[1]), float(mean[2])));
 }
 
 }  // namespace
