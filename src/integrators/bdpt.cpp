@@ -17,15 +17,20 @@ namespace tessera {
 // 1/spp normalisation as light tracing (lt.cpp).
 Rgb BdptIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler& sampler, SplatSink& splats) const {
     thread_local std::vector<PathVertex> camera, light;
+    traceBdptSubpaths(ctx, raster, sampler, settings_.heuristic, 0.0, camera, light);
+    return connectAllStrategies(ctx, light, camera, sampler, splats, settings_);
+}
+
+void traceBdptSubpaths(const RenderContext& ctx, Vec2f raster, Sampler& sampler, MisHeuristic heuristic, double eta,
+                       std::vector<PathVertex>& camera, std::vector<PathVertex>& light) {
     const int maxDepth = ctx.maxDepth;
     traceCameraSubpath(ctx, raster, sampler, maxDepth < 0 ? -1 : maxDepth + 2, camera);
     traceLightSubpath(ctx, sampler, maxDepth < 0 ? -1 : maxDepth + 1, light);
-    bdptMisPrefixes(ctx, light, camera, settings_.heuristic);  // makes every weight below O(1)
+    bdptMisPrefixes(ctx, light, camera, heuristic, eta);  // makes every weight O(1)
     if (ctx.trace) [[unlikely]] {
         traceSubpath(*ctx.trace, "camera vertex", camera);
         traceSubpath(*ctx.trace, "light vertex", light);
     }
-    return connectAllStrategies(ctx, light, camera, sampler, splats, settings_);
 }
 
 Rgb connectAllStrategies(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,

@@ -22,6 +22,12 @@ struct BdptSettings {
     bool unweighted = false;  ///< contributions without their MIS weight (debug view only)
 };
 
+/// One sample's camera sub-path through `raster` and light sub-path (at most ctx.maxDepth bounces
+/// between them), their MIS prefixes (bdpt_mis.h's (‡) with `eta`; 0 for bdpt) and, when replaying
+/// a sample, their trace: what bdpt and vcm draw before connecting.
+void traceBdptSubpaths(const RenderContext& ctx, Vec2f raster, Sampler& sampler, MisHeuristic heuristic, double eta,
+                       std::vector<PathVertex>& camera, std::vector<PathVertex>& light);
+
 /// Every connection strategy (s, t) of one sample's sub-paths (bdptMisPrefixes must have run on
 /// them with the same `eta`): returns the camera pixel's share and splats the t = 1 strategies.
 /// `eta` > 0 weights them against VCM's merges too (bdpt_mis.h's (‡)).

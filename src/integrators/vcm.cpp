@@ -136,14 +136,8 @@ Rgb VcmIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler
     thread_local std::vector<PathVertex> camera, light;
     const int maxDepth = ctx.maxDepth;
     // The sub-paths and connections of bdpt, drawn from the same numbers.
-    traceCameraSubpath(ctx, raster, sampler, maxDepth < 0 ? -1 : maxDepth + 2, camera);
-    traceLightSubpath(ctx, sampler, maxDepth < 0 ? -1 : maxDepth + 1, light);
     const double eta = merging ? etaOf(pass_.paths, pass_.radius) : 0.0;
-    bdptMisPrefixes(ctx, light, camera, heuristic_, eta);
-    if (ctx.trace) [[unlikely]] {
-        traceSubpath(*ctx.trace, "camera vertex", camera);
-        traceSubpath(*ctx.trace, "light vertex", light);
-    }
+    traceBdptSubpaths(ctx, raster, sampler, heuristic_, eta, camera, light);
     BdptSettings connections;
     connections.heuristic = heuristic_;
     Rgb L = connectAllStrategies(ctx, light, camera, sampler, splats, connections, eta);
