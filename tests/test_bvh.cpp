@@ -10,8 +10,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "accel/bvh_accel.h"
+#include "accel/kdtree_accel.h"
 #include "validation/validate.h"
 #include "core/rng.h"
 #include "scene/gltf_loader.h"
@@ -100,6 +102,28 @@ TEST(Bvh, MatchesEmbreeOnSpheresIncludingRadius1e4Walls) {
     expectMatchesEmbree(scene.geometry, 3000, "sphere Cornell box");
     // Spheres and triangles mixed in one leaf range.
     expectMatchesEmbree(spheresAndTriangles(), 3000, "spheres and triangles");
+}
+
+TEST(Bvh, TrianglesWithNonFiniteVerticesAreLeftOutInOrder) {
+    // Triangles with a NaN or infinite vertex can never be hit: the gathering (done in parallel)
+    // drops them and keeps the others in mesh order, which the tree and the records must not feel.
+    SceneGeometry g = tinyTriangles(3000);
+    TriangleMesh& m = g.meshes[0];
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (uint32_t i = 0; i < m.triangles.size(); i += 97) {
+        uint32_t bad = uint32_t(m.positions.size());
+        m.positions.push_back(i % 2 ? Vec3f(nan, 0.f, 0.f) : Vec3f(0.f, kInfinity, 0.f));
+        m.triangles[i].y = bad;
+    }
+    SceneGeometry second = tinyTriangles(500);  // a second mesh: its references follow the first's
+    g.meshes.push_back(second.meshes[0]);
+    expectMatchesEmbree(g, 2000, "triangles with non-finite vertices");
+    KdTreeAccel kd(g, AccelOptions{});
+    auto embree = createAccel("embree", g);
+    for (RayKind kind : kValidationRayKinds) {
+        std::vector<Ray> rays = generateRays(g, *embree, kind, 2000, /*seed=*/3);
+        EXPECT_EQ(compareAccels(kd, *embree, g, rays, kind).errors, 0u) << toString(kind);
+    }
 }
 
 TEST(Bvh, MatchesEmbreeOnStanfordMeshes) {

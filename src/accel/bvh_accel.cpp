@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -71,14 +72,16 @@ BvhAccel::BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, c
     for (const TriangleMesh& m : geometry.meshes) hasCutOuts_ |= m.alphaMask && !m.triangles.empty();
     // The watertight test may place a hit a few ulps outside the exact triangle (its shear rounds):
     // padded boxes make sure a box face through an edge never hides such a hit.
-    GatheredPrimitives gathered = gatherPrimitives(geometry, /*padTriangles=*/true);
-    prims_ = std::move(gathered.refs);
-    // gatherPrimitives lists triangles before spheres: build primitive i is a triangle when i < triangleRefs_.
-    triangleRefs_ = uint32_t(std::partition_point(prims_.begin(), prims_.end(), [&](const PrimRef& p) {
-                                 return p.geomId != geometry.sphereGeomId();
-                             }) - prims_.begin());
+    // Everything from the gathering on runs in the build's TBB arena (its thread count).
     auto build = [&] {
+        GatheredPrimitives gathered = gatherPrimitives(geometry, /*padTriangles=*/true);
+        prims_ = std::move(gathered.refs);
+        // gatherPrimitives lists triangles before spheres: build primitive i is a triangle when i < triangleRefs_.
+        triangleRefs_ = uint32_t(std::partition_point(prims_.begin(), prims_.end(), [&](const PrimRef& p) {
+                                     return p.geomId != geometry.sphereGeomId();
+                                 }) - prims_.begin());
         BinaryBvh bin = buildBinaryTree(gathered.bounds);
+        separateLeafKinds(bin, gathered.bounds);
         buildWideTree(bin);
     };
     if (options.threads > 0) tbb::task_arena(options.threads).execute(build);  // the build's TBB tasks
@@ -88,6 +91,54 @@ BvhAccel::BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, c
     stats_.memoryBytes = nodes_.size() * sizeof(Node8) + triangles_.size() * sizeof(Triangle4) +
                          mixedPrims_.size() * sizeof(PrimRef);
     stats_.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void BvhAccel::separateLeafKinds(BinaryBvh& bin, std::span<const Bounds3f> primBounds) const {
+    if (triangleRefs_ == 0 || triangleRefs_ == prims_.size()) return;  // one kind only
+    std::vector<uint32_t> mixed, todo{0u};
+    while (!todo.empty()) {
+        uint32_t k = todo.back();
+        todo.pop_back();
+        const BvhBuildNode& n = bin.nodes[k];
+        if (!n.isLeaf()) {
+            todo.push_back(n.left), todo.push_back(n.right);
+            continue;
+        }
+        const uint32_t* order = &bin.primIndices[n.first()];
+        bool triangles = false, spheres = false;
+        for (uint32_t i = 0; i < n.count; ++i) (order[i] < triangleRefs_ ? triangles : spheres) = true;
+        if (triangles && spheres) mixed.push_back(k);
+    }
+    if (mixed.empty()) return;
+    std::sort(mixed.begin(), mixed.end());  // new slots in slot order: the tree stays deterministic
+    BinaryBvh::NodeArray grown;
+    grown.allocate(bin.nodes.size + 2 * mixed.size());
+    std::memcpy(static_cast<void*>(&grown[0]), &bin.nodes[0], bin.nodes.size * sizeof(BvhBuildNode));
+    uint32_t next = uint32_t(bin.nodes.size);
+    for (uint32_t k : mixed) {
+        BvhBuildNode& leaf = grown[k];
+        uint32_t* order = &bin.primIndices[leaf.first()];
+        uint32_t* firstSphere =
+            std::stable_partition(order, order + leaf.count, [&](uint32_t i) { return i < triangleRefs_; });
+        uint32_t triangleCount = uint32_t(firstSphere - order);
+        // A part's box: its primitives' boxes, clipped to the leaf's (with spatial splits a leaf
+        // holds only the parts of its primitives inside its box).
+        auto part = [&](uint32_t first, uint32_t count) {
+            BvhBuildNode n;
+            for (uint32_t i = 0; i < count; ++i) n.bounds.extend(primBounds[bin.primIndices[first + i]]);
+            n.bounds = n.bounds.intersection(leaf.bounds);
+            n.count = count;
+            n.left = first;
+            return n;
+        };
+        grown[next] = part(leaf.first(), triangleCount);
+        grown[next + 1] = part(leaf.first() + triangleCount, leaf.count - triangleCount);
+        leaf.count = 0;
+        leaf.left = next, leaf.right = next + 1;
+        next += 2;
+    }
+    bin.nodes = std::move(grown);
+    ++bin.maxDepth;
 }
 
 BinaryBvh BvhAccel::buildBinaryTree(std::span<const Bounds3f> primBounds) const {
@@ -353,7 +404,11 @@ std::string BvhAccel::checkInvariants() const {
                         }
             } else {
                 uint32_t first = (ref & ~(kLeafBit | kMixedBit)) >> 4, count = ref & 15u;
-                for (uint32_t k = 0; k < count; ++k) visitPrim(mixedPrims_[first + k], box);
+                for (uint32_t k = 0; k < count; ++k) {
+                    if (mixedPrims_[first + k].geomId != geometry_.sphereGeomId())
+                        return "a triangle in a sphere leaf (separateLeafKinds keeps the kinds apart)";
+                    visitPrim(mixedPrims_[first + k], box);
+                }
             }
         }
     }

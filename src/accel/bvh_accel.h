@@ -65,7 +65,7 @@ public:
 
     /// Child reference: inner node (its byte offset in the node array, once built), or a leaf
     /// (kLeafBit). Triangle-only leaf: the first Triangle4 block's byte offset / 16, << 2 | (blocks − 1).
-    /// Leaf holding a sphere (kMixedBit): first mixedPrims_ index << 4 | count.
+    /// Leaf of spheres (kMixedBit; never beside triangles, separateLeafKinds): first mixedPrims_ index << 4 | count.
     static constexpr uint32_t kLeafBit = 0x80000000u;
     static constexpr uint32_t kMixedBit = 0x40000000u;
 
@@ -105,6 +105,12 @@ private:
     };
     /// The binary tree over the gathered primitives (prims_, boxes `primBounds`).
     BinaryBvh buildBinaryTree(std::span<const Bounds3f> primBounds) const;
+    /// Turns every leaf holding both triangles and spheres into an inner node over a triangle leaf
+    /// and a sphere leaf: a leaf with a sphere is tested one primitive at a time in scalar double
+    /// precision (mixed_leaf.h), so the triangles beside a sphere lost the 4-wide test. In
+    /// SmallVCM's Cornell box (20 triangles and a large sphere) mixed leaves took two thirds of the
+    /// shadow rays' instructions.
+    void separateLeafKinds(BinaryBvh& bin, std::span<const Bounds3f> primBounds) const;
     /// Collapses the binary tree into nodes_, triangles_ and mixedPrims_.
     void buildWideTree(const BinaryBvh& bin);
     /// The wide node over binary node `binNode`'s subtree (and, first, those below it): returns

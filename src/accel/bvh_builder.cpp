@@ -1,6 +1,7 @@
 #include "accel/bvh_builder.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
@@ -9,6 +10,7 @@
 #include <atomic>
 #include <cstring>
 #include <tuple>
+#include <utility>
 
 #include "accel/bvh_binning.h"
 
@@ -46,23 +48,38 @@ public:
         size_t n = primBounds_.size();
         if (n == 0) return;
         refs_.resize(n);
-        Box bounds, centroids;
-        for (size_t i = 0; i < n; ++i) {
-            const Bounds3f& b = primBounds_[i];
-            float indexBits;
-            uint32_t idx = uint32_t(i);
-            std::memcpy(&indexBits, &idx, 4);
-            Ref& r = refs_[i];
-            r = Ref{Vf4{b.lower.x, b.lower.y, b.lower.z, indexBits}, Vf4{b.upper.x, b.upper.y, b.upper.z, 0.f}};
-            bounds.extend(r.lower(), r.hi);
-            Vf4 c = r.centroid2();
-            centroids.extend(c, c);
-        }
+        // The references and the root's two boxes in parallel (min and max are exact in any
+        // order, so the boxes do not depend on the split): with two threads these serial passes
+        // had been a tenth of the dragon's build.
+        using BoxPair = std::pair<Box, Box>;
+        auto [bounds, centroids] = tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, n, 8192), BoxPair{},
+            [&](const tbb::blocked_range<size_t>& range, BoxPair boxes) {
+                for (size_t i = range.begin(); i != range.end(); ++i) {
+                    const Bounds3f& b = primBounds_[i];
+                    float indexBits;
+                    uint32_t idx = uint32_t(i);
+                    std::memcpy(&indexBits, &idx, 4);
+                    Ref& r = refs_[i];
+                    r = Ref{Vf4{b.lower.x, b.lower.y, b.lower.z, indexBits}, Vf4{b.upper.x, b.upper.y, b.upper.z, 0.f}};
+                    boxes.first.extend(r.lower(), r.hi);
+                    Vf4 c = r.centroid2();
+                    boxes.second.extend(c, c);
+                }
+                return boxes;
+            },
+            [](BoxPair a, const BoxPair& b) {
+                a.first.extend(b.first);
+                a.second.extend(b.second);
+                return a;
+            });
         out_.nodes.allocate(2 * n - 1);
         uint32_t cursor = 1;
         build(0, 0, uint32_t(n), bounds, centroids, 0, cursor);
         out_.primIndices.resize(n);
-        for (size_t i = 0; i < n; ++i) out_.primIndices[i] = refs_[i].index();
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16384), [&](const tbb::blocked_range<size_t>& range) {
+            for (size_t i = range.begin(); i != range.end(); ++i) out_.primIndices[i] = refs_[i].index();
+        });
         out_.maxDepth = maxDepth_.load();
     }
 

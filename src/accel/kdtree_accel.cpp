@@ -23,10 +23,12 @@ KdTreeAccel::KdTreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
     for (const TriangleMesh& m : geometry.meshes) hasCutOuts_ |= m.alphaMask && !m.triangles.empty();
     // Exact boxes: padding them would make neighbours sharing a vertex straddle every plane through
     // it. The traversal is conservative instead (kdtree_traversal.cpp).
-    GatheredPrimitives gathered = gatherPrimitives(geometry, /*padTriangles=*/false);
-    prims_ = std::move(gathered.refs);
     KdTree tree;
-    auto build = [&] { tree = buildBinaryTree(gathered.bounds); };
+    auto build = [&] {  // the gathering too runs in the build's TBB arena
+        GatheredPrimitives gathered = gatherPrimitives(geometry, /*padTriangles=*/false);
+        prims_ = std::move(gathered.refs);
+        tree = buildBinaryTree(gathered.bounds);
+    };
     if (options.threads > 0) tbb::task_arena(options.threads).execute(build);  // the builder's TBB tasks
     else build();
     rootCell_ = tree.bounds;
