@@ -193,10 +193,10 @@ int gatherChildren(const BinaryBvh& bin, uint32_t binNode, uint32_t (&kids)[8]) 
     return count;
 }
 
-/// The number of wide nodes the collapse makes (the same gathering, nothing written).
-size_t countWideNodes(const BinaryBvh& bin) {
+/// The number of wide nodes the collapse of binary node `root` makes (the same gathering, nothing written).
+size_t countWideNodes(const BinaryBvh& bin, uint32_t root) {
     size_t count = 0;
-    std::vector<uint32_t> todo{0u};
+    std::vector<uint32_t> todo{root};
     while (!todo.empty()) {
         uint32_t node = todo.back();
         todo.pop_back();
@@ -209,33 +209,90 @@ size_t countWideNodes(const BinaryBvh& bin) {
     return count;
 }
 
+/// A child reference of a part's node, moved to where the part lands in the joined arrays.
+uint32_t relocateRef(uint32_t ref, uint32_t nodeBytes, size_t blockUnits, uint32_t mixedBase) {
+    if (!(ref & BvhAccel::kLeafBit)) return ref + nodeBytes;
+    if (ref & BvhAccel::kMixedBit) {
+        uint32_t first = (ref & ~(BvhAccel::kLeafBit | BvhAccel::kMixedBit)) >> 4;
+        return BvhAccel::kLeafBit | BvhAccel::kMixedBit | ((first + mixedBase) << 4) | (ref & 15u);
+    }
+    size_t units = ((ref >> 2) & 0x0fffffffu) + blockUnits;
+    if (units >= (size_t(1) << 28)) throw std::runtime_error("bvh: more than 4 GiB of leaf triangles");
+    return BvhAccel::kLeafBit | (uint32_t(units) << 2) | (ref & 3u);
+}
+
+/// Writes wide node `n` over `count` children (binary nodes `kids`, references `refs`, primitive
+/// counts `counts`). Lanes ordered by the primitives below them, most first: the any-hit traversal
+/// enters the hit lanes from the last, so it tries the smallest subtrees (often a leaf) first, as
+/// Embree's builder and any-hit traversal do: shadow rays on Sponza and Conference then visit
+/// 17–41% fewer nodes and leaves than in the gathering order. Stable, so the order is fully determined.
+void writeWideNode(BvhAccel::Node8& n, const BinaryBvh& bin, const uint32_t* kids, const uint32_t* refs,
+                   const uint32_t* counts, int count) {
+    int lane[8];
+    for (int i = 0; i < count; ++i) lane[i] = i;
+    std::stable_sort(lane, lane + count, [&](int a, int b) { return counts[a] > counts[b]; });
+    for (int i = 0; i < 8; ++i) setEmptyChild(n, i);
+    for (int i = 0; i < count; ++i) {
+        const Bounds3f& b = bin.nodes[kids[lane[i]]].bounds;
+        for (int a = 0; a < 3; ++a) {
+            n.bounds[a][i] = b.lower[a];
+            n.bounds[3 + a][i] = b.upper[a];
+        }
+        n.child[i] = refs[lane[i]];
+    }
+}
+
 }  // namespace
 
 void BvhAccel::buildWideTree(const BinaryBvh& bin) {
-    if (!prims_.empty()) {
-        // The exact node count first: growing the node array and shrinking it afterwards copied it
-        // twice.
-        size_t wideNodes = bin.nodes[0].isLeaf() ? 1 : countWideNodes(bin);
-        if (wideNodes * sizeof(Node8) >= size_t(kLeafBit)) throw std::runtime_error("bvh: more than 2 GiB of nodes");
-        nodes_.reserve(wideNodes);
-        std::vector<LeafBlocks> leaves;
-        uint32_t blocks = 0;
-        if (bin.nodes[0].isLeaf()) {
-            // A wide root is always an inner node: one leaf child, seven empty lanes.
-            nodes_.emplace_back();
-            for (int i = 0; i < 8; ++i) setEmptyChild(nodes_[0], i);
-            const Bounds3f& b = bin.nodes[0].bounds;
-            for (int a = 0; a < 3; ++a) {
-                nodes_[0].bounds[a][0] = b.lower[a];
-                nodes_[0].bounds[3 + a][0] = b.upper[a];
-            }
-            nodes_[0].child[0] = makeLeaf(bin, bin.nodes[0], leaves, blocks);
+    if (prims_.empty()) return;
+    // A wide root is always an inner node; over a binary leaf it has one leaf child.
+    uint32_t kids[8] = {0};
+    const int count = bin.nodes[0].isLeaf() ? 1 : gatherChildren(bin, 0, kids);
+    // Each root child's subtree into its own part, in parallel; every part reserves its exact
+    // node count first (growing the node array and shrinking it afterwards copied it twice).
+    std::vector<WideParts> parts(static_cast<size_t>(count));
+    uint32_t refs[8], counts[8];
+    tbb::parallel_for(0, count, [&](int i) {
+        const BvhBuildNode& k = bin.nodes[kids[i]];
+        if (k.isLeaf()) {
+            refs[i] = makeLeaf(bin, k, parts[size_t(i)]), counts[i] = k.count;
         } else {
-            uint32_t prims;
-            collapse(bin, 0, leaves, blocks, prims);
+            parts[size_t(i)].nodes.reserve(countWideNodes(bin, kids[i]));
+            refs[i] = collapse(bin, kids[i], parts[size_t(i)], counts[i]);
         }
-        fillLeaves(bin, leaves, blocks);
+    });
+    size_t nodeCount = 1, leafCount = 0, mixedCount = 0;
+    for (const WideParts& part : parts) nodeCount += part.nodes.size(), leafCount += part.leaves.size(), mixedCount += part.mixed.size();
+    if (nodeCount * sizeof(Node8) >= size_t(kLeafBit)) throw std::runtime_error("bvh: more than 2 GiB of nodes");
+    // Joined in child order: the root, then each part's nodes, leaves and sphere primitives, with
+    // its references moved by the parts before it.
+    nodes_.resize(nodeCount);
+    std::vector<LeafBlocks> leaves;
+    leaves.reserve(leafCount);
+    mixedPrims_.reserve(mixedCount);
+    uint32_t nodeBase = 1, blockBase = 0;
+    for (int i = 0; i < count; ++i) {
+        WideParts& part = parts[size_t(i)];
+        const uint32_t nodeBytes = nodeBase * uint32_t(sizeof(Node8)), mixedBase = uint32_t(mixedPrims_.size());
+        const size_t blockUnits = size_t(blockBase) * (sizeof(Triangle4) / 16);
+        refs[i] = relocateRef(refs[i], nodeBytes, blockUnits, mixedBase);
+        for (size_t k = 0; k < part.nodes.size(); ++k) {
+            Node8& n = nodes_[nodeBase + k];
+            n = part.nodes[k];
+            for (int lane = 0; lane < 8; ++lane)
+                if (!(n.bounds[0][lane] > n.bounds[3][lane]))  // empty lanes keep their reference
+                    n.child[lane] = relocateRef(n.child[lane], nodeBytes, blockUnits, mixedBase);
+        }
+        for (LeafBlocks leaf : part.leaves) leaf.firstBlock += blockBase, leaves.push_back(leaf);
+        mixedPrims_.insert(mixedPrims_.end(), part.mixed.begin(), part.mixed.end());
+        nodeBase += uint32_t(part.nodes.size());
+        blockBase += part.blocks;
+        part = WideParts{};  // its memory back before the leaves are filled
     }
+    if (bin.nodes[0].isLeaf()) kids[0] = 0;
+    writeWideNode(nodes_[0], bin, kids, refs, counts, count);
+    fillLeaves(bin, leaves, blockBase);
 }
 
 void BvhAccel::fillLeaves(const BinaryBvh& bin, const std::vector<LeafBlocks>& leaves, uint32_t blocks) {
@@ -261,19 +318,19 @@ void BvhAccel::fillLeaves(const BinaryBvh& bin, const std::vector<LeafBlocks>& l
     });
 }
 
-uint32_t BvhAccel::makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf, std::vector<LeafBlocks>& leaves, uint32_t& blocks) {
+uint32_t BvhAccel::makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf, WideParts& out) const {
     const uint32_t* order = &bin.primIndices[leaf.first()];
     bool allTriangles = true;
     for (uint32_t i = 0; i < leaf.count; ++i) allTriangles &= order[i] < triangleRefs_;
     if (!allTriangles) {
-        uint32_t first = uint32_t(mixedPrims_.size());
-        for (uint32_t i = 0; i < leaf.count; ++i) mixedPrims_.push_back(prims_[order[i]]);
+        uint32_t first = uint32_t(out.mixed.size());
+        for (uint32_t i = 0; i < leaf.count; ++i) out.mixed.push_back(prims_[order[i]]);
         return kLeafBit | kMixedBit | (first << 4) | leaf.count;
     }
     // Blocks are numbered here and filled later (fillLeaves).
-    uint32_t firstBlock = blocks;
-    blocks += (leaf.count + 3) / 4;
-    leaves.push_back({leaf.first(), leaf.count, firstBlock});
+    uint32_t firstBlock = out.blocks;
+    out.blocks += (leaf.count + 3) / 4;
+    out.leaves.push_back({leaf.first(), leaf.count, firstBlock});
     // The first block's byte offset in 16-byte units (bits 2–29), so that the traversal finds it
     // with a mask and a shift (leafBlocks()).
     static_assert(sizeof(Triangle4) % 16 == 0);
@@ -282,37 +339,20 @@ uint32_t BvhAccel::makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf, std:
     return kLeafBit | (uint32_t(units) << 2) | ((leaf.count + 3) / 4 - 1);
 }
 
-uint32_t BvhAccel::collapse(const BinaryBvh& bin, uint32_t binNode, std::vector<LeafBlocks>& leaves, uint32_t& blocks,
-                            uint32_t& prims) {
+uint32_t BvhAccel::collapse(const BinaryBvh& bin, uint32_t binNode, WideParts& out, uint32_t& prims) const {
     uint32_t kids[8];
     int count = gatherChildren(bin, binNode, kids);
-    uint32_t index = uint32_t(nodes_.size());
-    nodes_.emplace_back();
+    uint32_t index = uint32_t(out.nodes.size());
+    out.nodes.emplace_back();
     uint32_t refs[8], counts[8];
     prims = 0;
     for (int i = 0; i < count; ++i) {
         const BvhBuildNode& k = bin.nodes[kids[i]];
-        if (k.isLeaf()) refs[i] = makeLeaf(bin, k, leaves, blocks), counts[i] = k.count;
-        else refs[i] = collapse(bin, kids[i], leaves, blocks, counts[i]);
+        if (k.isLeaf()) refs[i] = makeLeaf(bin, k, out), counts[i] = k.count;
+        else refs[i] = collapse(bin, kids[i], out, counts[i]);
         prims += counts[i];
     }
-    // Lanes ordered by the primitives below them, most first. The any-hit traversal enters the hit
-    // lanes from the last, so it tries the smallest subtrees (often a leaf) first, as Embree's
-    // builder and any-hit traversal do: shadow rays on Sponza and Conference then visit 17–41%
-    // fewer nodes and leaves than in the gathering order. Stable, so the order is fully determined.
-    int lane[8];
-    for (int i = 0; i < count; ++i) lane[i] = i;
-    std::stable_sort(lane, lane + count, [&](int a, int b) { return counts[a] > counts[b]; });
-    Node8& n = nodes_[index];
-    for (int i = 0; i < 8; ++i) setEmptyChild(n, i);
-    for (int i = 0; i < count; ++i) {
-        const Bounds3f& b = bin.nodes[kids[lane[i]]].bounds;
-        for (int a = 0; a < 3; ++a) {
-            n.bounds[a][i] = b.lower[a];
-            n.bounds[3 + a][i] = b.upper[a];
-        }
-        n.child[i] = refs[lane[i]];
-    }
+    writeWideNode(out.nodes[index], bin, kids, refs, counts, count);
     // Inner child references are byte offsets from the node array: the traversal then adds
     // instead of multiplying by 224 on the path from one node's box test to the next node's load.
     return index * uint32_t(sizeof(Node8));

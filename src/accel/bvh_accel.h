@@ -111,14 +111,23 @@ private:
     /// SmallVCM's Cornell box (20 triangles and a large sphere) mixed leaves took two thirds of the
     /// shadow rays' instructions.
     void separateLeafKinds(BinaryBvh& bin, std::span<const Bounds3f> primBounds) const;
-    /// Collapses the binary tree into nodes_, triangles_ and mixedPrims_.
+    /// What a collapse writes: wide nodes in preorder, the triangle leaves to fill (their blocks
+    /// numbered from 0) and the sphere leaves' primitives. References inside are relative to the
+    /// part's own arrays until buildWideTree joins the parts.
+    struct WideParts {
+        std::vector<Node8> nodes;
+        std::vector<LeafBlocks> leaves;
+        uint32_t blocks = 0;
+        std::vector<PrimRef> mixed;
+    };
+    /// Collapses the binary tree into nodes_, triangles_ and mixedPrims_: the root's subtrees in
+    /// parallel, each into its own WideParts, joined in child order (the serial preorder, bit for
+    /// bit, whatever the thread count).
     void buildWideTree(const BinaryBvh& bin);
-    /// The wide node over binary node `binNode`'s subtree (and, first, those below it): returns
-    /// its reference; `prims` gets the subtree's primitive count. Triangle leaves are numbered in
-    /// `leaves` (next block: `blocks`) and filled afterwards by fillLeaves.
-    uint32_t collapse(const BinaryBvh& bin, uint32_t binNode, std::vector<LeafBlocks>& leaves, uint32_t& blocks,
-                      uint32_t& prims);
-    uint32_t makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf, std::vector<LeafBlocks>& leaves, uint32_t& blocks);
+    /// The wide node over binary node `binNode`'s subtree (and, first, those below it) in `out`:
+    /// returns its reference; `prims` gets the subtree's primitive count.
+    uint32_t collapse(const BinaryBvh& bin, uint32_t binNode, WideParts& out, uint32_t& prims) const;
+    uint32_t makeLeaf(const BinaryBvh& bin, const BvhBuildNode& leaf, WideParts& out) const;
     void fillLeaves(const BinaryBvh& bin, const std::vector<LeafBlocks>& leaves, uint32_t blocks);
 
     const SceneGeometry& geometry_;
