@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "accel/bvh_binning.h"
+#include "core/huge_page_allocator.h"
 
 namespace tessera {
 namespace {
@@ -87,7 +88,7 @@ private:
     std::span<const Bounds3f> primBounds_;
     BvhConfig config_;
     BinaryBvh& out_;
-    std::vector<Ref> refs_;
+    std::vector<Ref, HugePageAllocator<Ref>> refs_;  // written in full by run(): not zeroed first
     std::atomic<uint32_t> maxDepth_{0};
 
     float blocks(uint32_t n) const { return sahBlocks(n, config_.sahBlockSize); }
