@@ -33,39 +33,4 @@ void traceBdptSubpaths(const RenderContext& ctx, Vec2f raster, Sampler& sampler,
     }
 }
 
-Rgb connectAllStrategies(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
-                         Sampler& sampler, SplatSink& splats, const BdptSettings& settings, double eta) {
-    const int maxDepth = ctx.maxDepth;
-    Rgb L(0.f);
-    const int nCamera = int(camera.size()), nLight = int(light.size());
-    for (int t = 1; t <= nCamera; ++t) {
-        // s = 1 resamples its light point, so it exists even when the light sub-path is empty (its
-        // origin emitted nothing: a black texel of an emissive texture); leaving it out would drop
-        // the next-event strategy for those samples while its weight still counts on it. (1, 1)
-        // joins the light sub-path's own y0 to the lens; s + t − 2 bounces at most maxDepth.
-        int sMax = t == 1 ? nLight : std::max(nLight, 1);
-        if (maxDepth >= 0) sMax = std::min(sMax, maxDepth + 2 - t);
-        // s = 0 needs z(t−1) on an emitter (and t ≥ 2): most camera vertices are not, and the
-        // strategy is then zero without a call (the trace still lists every strategy).
-        const int sMin = t >= 2 && (camera[size_t(t - 1)].lightIndex != kInvalidId || ctx.trace) ? 0 : 1;
-        for (int s = sMin; s <= sMax; ++s) {
-            ConnectionResult r = connectBdpt(ctx, light, camera, s, t, sampler, settings.heuristic, true, eta);
-            if (ctx.trace) [[unlikely]] {
-                // Unweighted C*_{s,t}, its MIS weight and what reaches the image (t = 1: a splat).
-                ctx.trace->begin("strategy", s, t);
-                ctx.trace->add("unweighted", r.L);
-                ctx.trace->add("misW", r.weight);
-                ctx.trace->add("contribution", r.L * r.weight);
-                if (t == 1) ctx.trace->add("raster", Vec3f(r.raster.x, r.raster.y, 0.f));
-            }
-            if (isBlack(r.L)) continue;
-            if ((settings.onlyS >= 0 && s != settings.onlyS) || (settings.onlyT >= 0 && t != settings.onlyT)) continue;
-            Rgb c = settings.unweighted ? r.L : r.L * r.weight;
-            if (t == 1) splats.splat(ctx.camera.width(), ctx.camera.height(), r.raster, c);
-            else L += c;
-        }
-    }
-    return L;
-}
-
 }  // namespace tessera
