@@ -113,9 +113,14 @@ float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> l
     return bdptStrategyWeight(ctx, light, camera, s, t, qs, pt, connectionDensities(ctx, light, camera, s, t, qs, pt), heuristic, eta);
 }
 
-float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
-                         int s, int t, const PathVertex* qs, const PathVertex* pt, const ConnectionDensities& d,
-                         MisHeuristic heuristic, double eta) {
+namespace {
+
+/// bdptStrategyWeight's body, inlined into the connections below (each strategy's weight paid a
+/// call with ten arguments).
+[[gnu::always_inline]] inline float strategyWeight(const RenderContext& ctx, std::span<const PathVertex> light,
+                                                   std::span<const PathVertex> camera, int s, int t, const PathVertex* qs,
+                                                   const PathVertex* pt, const ConnectionDensities& d, MisHeuristic heuristic,
+                                                   double eta) {
     // A camera ray that escaped to the environment (z1 at infinity) can only be found by that
     // camera ray: no lens connection reaches a direction.
     if (s == 0 && t == 2 && pt->atInfinity) return 1.f;
@@ -163,6 +168,14 @@ float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> l
     if (s > 0) nee = neeOverOriginA(ctx, s == 1 ? *qs : light[0], s == 1 ? *pt : light[1]);
     else if (t >= 2) nee = neeOverOriginA(ctx, *pt, camera[size_t(t - 2)]);
     return bdptMisWeightFromEnds(y, z, lightIsDelta, heuristic, nee, eta);
+}
+
+}  // namespace
+
+float bdptStrategyWeight(const RenderContext& ctx, std::span<const PathVertex> light, std::span<const PathVertex> camera,
+                         int s, int t, const PathVertex* qs, const PathVertex* pt, const ConnectionDensities& d,
+                         MisHeuristic heuristic, double eta) {
+    return strategyWeight(ctx, light, camera, s, t, qs, pt, d, heuristic, eta);
 }
 
 namespace {
@@ -227,7 +240,7 @@ ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const Pat
         } else {
             d = connectionDensities(ctx, light, {&lens, 1}, s, 1, &qs, &lens);
         }
-        r.weight = bdptStrategyWeight(ctx, light, {&lens, 1}, s, 1, &qs, &lens, d, heuristic, eta);
+        r.weight = strategyWeight(ctx, light, {&lens, 1}, s, 1, &qs, &lens, d, heuristic, eta);
     }
     return r;
 }
@@ -268,7 +281,7 @@ ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const Pat
         ConnectionDensities d;
         pdfLightBothA(ctx, y0, pt, d.qsOriginA, d.ptRevA);
         pdfBothWaysA(ctx, bsdf, camera[size_t(t - 2)], pt, y0, d.qsRevA, d.ptMinusRevA);
-        r.weight = bdptStrategyWeight(ctx, {}, camera, 1, t, &y0, &pt, d, heuristic, eta);
+        r.weight = strategyWeight(ctx, {}, camera, 1, t, &y0, &pt, d, heuristic, eta);
     }
     return r;
 }
@@ -301,7 +314,7 @@ ConnectionResult connectEmitterHit(const RenderContext& ctx, std::span<const Pat
         ConnectionDensities d;
         pdfBothWaysA(ctx, bsdfQs, light[size_t(s - 2)], qs, pt, d.ptRevA, d.qsMinusRevA);
         pdfBothWaysA(ctx, bsdfPt, camera[size_t(t - 2)], pt, qs, d.qsRevA, d.ptMinusRevA);
-        r.weight = bdptStrategyWeight(ctx, light, camera, s, t, &qs, &pt, d, heuristic, eta);
+        r.weight = strategyWeight(ctx, light, camera, s, t, &qs, &pt, d, heuristic, eta);
     }
     return r;
 }
