@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -95,10 +94,11 @@ BvhAccel::BvhAccel(const SceneGeometry& geometry, const AccelOptions& options, c
 
 void BvhAccel::separateLeafKinds(BinaryBvh& bin, std::span<const Bounds3f> primBounds) const {
     if (triangleRefs_ == 0 || triangleRefs_ == prims_.size()) return;  // one kind only
-    std::vector<uint32_t> mixed, todo{0u};
+    std::vector<uint32_t> mixed, reached, todo{0u};
     while (!todo.empty()) {
         uint32_t k = todo.back();
         todo.pop_back();
+        reached.push_back(k);
         const BvhBuildNode& n = bin.nodes[k];
         if (!n.isLeaf()) {
             todo.push_back(n.left), todo.push_back(n.right);
@@ -111,9 +111,11 @@ void BvhAccel::separateLeafKinds(BinaryBvh& bin, std::span<const Bounds3f> primB
     }
     if (mixed.empty()) return;
     std::sort(mixed.begin(), mixed.end());  // new slots in slot order: the tree stays deterministic
+    // Only the nodes the tree reaches are copied, at their slots: most of the 2n − 1 slots were
+    // never written, and copying them would touch every page the builder left alone.
     BinaryBvh::NodeArray grown;
     grown.allocate(bin.nodes.size + 2 * mixed.size());
-    std::memcpy(static_cast<void*>(&grown[0]), &bin.nodes[0], bin.nodes.size * sizeof(BvhBuildNode));
+    for (uint32_t k : reached) grown[k] = bin.nodes[k];
     uint32_t next = uint32_t(bin.nodes.size);
     for (uint32_t k : mixed) {
         BvhBuildNode& leaf = grown[k];
