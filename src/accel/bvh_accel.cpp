@@ -255,7 +255,7 @@ void BvhAccel::buildWideTree(const BinaryBvh& bin) {
     // node count first (growing the node array and shrinking it afterwards copied it twice).
     std::vector<WideParts> parts(static_cast<size_t>(count));
     uint32_t refs[8], counts[8];
-    tbb::parallel_for(0, count, [&](int i) {
+    auto collapseChild = [&](int i) {
         const BvhBuildNode& k = bin.nodes[kids[i]];
         if (k.isLeaf()) {
             refs[i] = makeLeaf(bin, k, parts[size_t(i)]), counts[i] = k.count;
@@ -263,7 +263,12 @@ void BvhAccel::buildWideTree(const BinaryBvh& bin) {
             parts[size_t(i)].nodes.reserve(countWideNodes(bin, kids[i]));
             refs[i] = collapse(bin, kids[i], parts[size_t(i)], counts[i]);
         }
-    });
+    };
+    // Below the builder's parallel threshold the tasks cost more than the collapse (and a small
+    // scene builds without spawning any).
+    if (bin.primIndices.size() >= size_t(config_.parallelThreshold)) tbb::parallel_for(0, count, collapseChild);
+    else
+        for (int i = 0; i < count; ++i) collapseChild(i);
     size_t nodeCount = 1, leafCount = 0, mixedCount = 0;
     for (const WideParts& part : parts) nodeCount += part.nodes.size(), leafCount += part.leaves.size(), mixedCount += part.mixed.size();
     if (nodeCount * sizeof(Node8) >= size_t(kLeafBit)) throw std::runtime_error("bvh: more than 2 GiB of nodes");
