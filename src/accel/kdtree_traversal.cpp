@@ -98,18 +98,20 @@ struct WideRay {
     WideRay() = default;
     WideRay(const Ray& ray, const Vec3f& invD, const bool (&upward)[3], float eps) : inv{}, orgEntry{}, orgExit{} {
         const float nan = std::numeric_limits<float>::quiet_NaN();
-        for (int side = 0; side < 2; ++side)
-            for (int a = 0; a < 3; ++a) {
-                int i = a + 4 * side;
-                // Below the plane is the near side of a ray moving up.
-                bool near = side == 0 ? upward[a] : !upward[a];
-                inv[i] = invD[a];
-                // Far side: entry t − eps·|1/d| = (split − (o + eps·sign d))/d; near side: exit t + eps·|1/d|.
-                float moved = (near == upward[a]) ? ray.o[a] - eps : ray.o[a] + eps;
-                orgEntry[i] = near ? nan : moved;
-                orgExit[i] = near ? moved : nan;
-                downBits |= upward[a] ? 0u : 1u << a;
-            }
+        for (int a = 0; a < 3; ++a) {
+            // Lane a: the side below the plane, the near side of a ray moving up; lane a + 4: the
+            // side above. The far side bounds the entry, the near side the exit, each with the
+            // origin moved by eps away from the side: t ∓ eps·|1/d| = (split − (o ∓ eps))/d.
+            // Chosen by indexing with the direction's sign, not by branches: for incoherent rays
+            // the sign is a coin toss, and the branches the conditionals compiled to cost about one
+            // mispredict per ray (callgrind's branch simulator, Sponza's diffuse rays).
+            const int up = upward[a];
+            const float below[2] = {ray.o[a] - eps, nan}, above[2] = {nan, ray.o[a] + eps};
+            inv[a] = inv[a + 4] = invD[a];
+            orgEntry[a] = below[up], orgExit[a] = below[1 - up];
+            orgEntry[a + 4] = above[up], orgExit[a + 4] = above[1 - up];
+            downBits |= uint32_t(1 - up) << a;
+        }
     }
 };
 
@@ -177,8 +179,8 @@ TESSERA_INLINE bool startRay(const Ray& ray, const Bounds3f& rootCell_, float sc
     // interval alone).
     float tMin = ray.tMin, tMax = ray.tMax;
     for (int a = 0; a < 3; ++a) {
-        float nearPlane = upward[a] ? rootCell_.lower[a] - eps : rootCell_.upper[a] + eps;
-        float farPlane = upward[a] ? rootCell_.upper[a] + eps : rootCell_.lower[a] - eps;
+        const float planes[2] = {rootCell_.upper[a] + eps, rootCell_.lower[a] - eps};  // indexed, as in WideRay
+        float nearPlane = planes[int(upward[a])], farPlane = planes[1 - int(upward[a])];
         float tn = (nearPlane - ray.o[a]) * invD[a];
         float tf = (farPlane - ray.o[a]) * twoUlpsLarger(invD[a]);
         tMin = tn > tMin ? tn : tMin;
