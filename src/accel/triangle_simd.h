@@ -16,6 +16,7 @@
 #include "accel/primitive_refs.h"
 #include "core/ray.h"
 #include "geometry/hit.h"
+#include "geometry/intersect.h"
 
 namespace tessera {
 
@@ -51,17 +52,8 @@ struct TriRayW {
         using L = Lanes<W>;
         // Plain arrays: glm's operator[] with a run-time index compiles to a branch per access.
         const float d[3] = {ray.d.x, ray.d.y, ray.d.z}, o[3] = {ray.o.x, ray.o.y, ray.o.z};
-        // The axes by arithmetic, not branches: for incoherent rays the dominant axis and its sign
-        // are coin tosses, and the branches the conditionals compiled to cost one mispredict per
-        // ray (callgrind's branch simulator, Sponza's diffuse rays: 1.07 per ray, most of which
-        // never reach a leaf). kz = x if |dx| > |dy| and |dx| > |dz|, else y if |dy| > |dz|, else z.
-        float ax = std::abs(d[0]), ay = std::abs(d[1]), az = std::abs(d[2]);
-        int xOverY = ax > ay, kzIfX = 2 * int(!(ax > az)), kzIfNotX = 2 - int(ay > az);
-        kz = kzIfNotX + (kzIfX - kzIfNotX) * xOverY;
-        static constexpr int kNext[3] = {1, 2, 0};
-        int x = kNext[kz], y = kNext[x], negative = d[kz] < 0.f;  // a negative axis swaps x and y
-        kx = x + (y - x) * negative;
-        ky = y + (x - y) * negative;
+        const WatertightAxes axes = watertightAxes(d);
+        kx = axes.kx, ky = axes.ky, kz = axes.kz;
         sx = L::splat(d[kx] / d[kz]);
         sy = L::splat(d[ky] / d[kz]);
         sz = L::splat(1.f / d[kz]);

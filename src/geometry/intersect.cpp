@@ -3,14 +3,11 @@
 namespace tessera {
 
 bool intersectTriangle(const Ray& ray, const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, TriangleHit& hit) {
-    // Dimension where the ray direction is maximal becomes z; keep the winding by swapping x and y
-    // when d[kz] is negative (paper, Section 3.1).
-    Vec3f ad = glm::abs(ray.d);
-    int kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-    if (ray.d[kz] == 0.f) return false;
-    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
-    if (ray.d[kz] < 0.f) std::swap(kx, ky);
-    float sx = ray.d[kx] / ray.d[kz], sy = ray.d[ky] / ray.d[kz], sz = 1.f / ray.d[kz];
+    // Woop et al. 2013; the axes as in the SIMD leaf tests (watertightAxes).
+    const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
+    const auto [kx, ky, kz] = watertightAxes(d);
+    if (d[kz] == 0.f) return false;
+    float sx = d[kx] / d[kz], sy = d[ky] / d[kz], sz = 1.f / d[kz];
 
     Vec3f a = p0 - ray.o, b = p1 - ray.o, c = p2 - ray.o;
     float ax = a[kx] - sx * a[kz], ay = a[ky] - sy * a[kz];
