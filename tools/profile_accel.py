@@ -1,0 +1,143 @@
+#!/usr/bin/env python3
+"""Where a structure's tracing time goes, counted instead of timed: `tessera bench-accel` under
+Valgrind's callgrind with its cache and branch simulators, collecting only inside the benchmark's
+ray loops, then per structure and ray kind the instructions, data-cache misses (first level and
+last level) and mispredicted branches per ray, with each structure's ratio to Embree's.
+
+The counts do not depend on other tenants of the machine, which is what makes them the profile of a
+gap that timing on a shared host cannot settle (writeup.md, "Where the gaps come from").
+
+  tools/profile_accel.py [--tessera PATH] [--accel bvh,kdtree,embree] [--resolution 256]
+                         [--ll-bytes 1048576] [--json] MESH...
+
+The simulated caches: a 32 KiB 8-way first level (data and instructions) and one last level of
+--ll-bytes (the default, 1 MiB 16-way, is the AMD EPYC host's per-core L2; 33554432 models its
+shared L3). Callgrind's branch simulator is a simple one (a table of 2-bit counters for
+conditional branches, a branch target buffer for indirect ones): its counts compare two kernels'
+branchiness, not a real core's predictor.
+"""
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+# The methods bench-accel traces each ray kind through (its `trace` switch).
+KIND_OF_METHOD = {"intersectCoherent": "primary", "intersect": "diffuse", "occluded": "shadow"}
+STRUCTURE_OF_CLASS = {"BvhAccel": "bvh", "KdTreeAccel": "kdtree", "EmbreeAccel": "embree"}
+METHOD_RE = re.compile(r"^tessera::(\w+)::(intersectCoherent|intersect|occluded)\(tessera::Ray const&")
+
+
+def parse_callgrind(path):
+    """Inclusive costs and call counts of the functions the collected region called: for each
+    function, the sum of its own cost lines and of its call lines' (inclusive) costs."""
+    names = {}
+    events = []
+    inclusive = {}
+    calls = {}
+    fn = None
+    pending_call = None  # (callee, count): the next cost line is that call's inclusive cost
+
+    def name(token):
+        m = re.match(r"\((\d+)\)(?:\s+(.*))?", token)
+        if not m:
+            return token
+        if m.group(2) is not None:
+            names[m.group(1)] = m.group(2)
+        return names[m.group(1)]
+
+    with open(path, errors="replace") as f:
+        for line in f:
+            line = line.rstrip("\n")
+            if not line:
+                continue
+            c = line[0]
+            if c.isdigit() or c in "+-*":
+                if fn is None:
+                    continue
+                costs = [int(x) for x in line.split()[1:]]
+                acc = inclusive.setdefault(fn, [0] * len(events))
+                for i, v in enumerate(costs):
+                    acc[i] += v
+                if pending_call:
+                    callee, count = pending_call
+                    calls[callee] = calls.get(callee, 0) + count
+                    pending_call = None
+                continue
+            key, _, value = line.partition("=")
+            if key == "events" or line.startswith("events:"):
+                events = line.split(":", 1)[1].split()
+            elif key == "fn":
+                fn = name(value)
+            elif key == "cfn":
+                callee = name(value)
+            elif key == "calls":
+                pending_call = (callee, int(value.split()[0]))
+    return events, inclusive, calls
+
+
+def profile(tessera, mesh, accels, resolution, ll_bytes):
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "callgrind.out")
+        cmd = ["valgrind", "--tool=callgrind", "--cache-sim=yes", "--branch-sim=yes",
+               "--I1=32768,8,64", "--D1=32768,8,64", f"--LL={ll_bytes},16,64",
+               "--collect-atstart=no", "--toggle-collect=*traceAllAtStackOffset*", f"--callgrind-out-file={out}",
+               tessera, "bench-accel", mesh, "--accel", accels, "--threads", "1", "--repeat", "1",
+               "--resolution", str(resolution), "--clock", "wall"]
+        run = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        if run.returncode != 0:
+            sys.exit(f"profile_accel.py: {' '.join(cmd)} failed:\n{run.stderr[-2000:]}")
+        events, inclusive, calls = parse_callgrind(out)
+    rows = {}
+    for fn, costs in inclusive.items():
+        m = METHOD_RE.match(fn)
+        if not m or m.group(1) not in STRUCTURE_OF_CLASS or not calls.get(fn):
+            continue
+        c = dict(zip(events, costs))
+        rays = calls[fn]
+        rows[(STRUCTURE_OF_CLASS[m.group(1)], KIND_OF_METHOD[m.group(2)])] = {
+            "rays": rays,
+            "instructions": c.get("Ir", 0) / rays,
+            "l1Misses": (c.get("D1mr", 0) + c.get("D1mw", 0)) / rays,
+            "llMisses": (c.get("DLmr", 0) + c.get("DLmw", 0)) / rays,
+            "mispredicts": (c.get("Bcm", 0) + c.get("Bim", 0)) / rays,
+        }
+    return rows
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("meshes", nargs="+", metavar="MESH")
+    ap.add_argument("--tessera", default="build/src/tessera")
+    ap.add_argument("--accel", default="bvh,kdtree,embree")
+    ap.add_argument("--resolution", type=int, default=256)
+    ap.add_argument("--ll-bytes", type=int, default=1 << 20)
+    ap.add_argument("--json", action="store_true")
+    a = ap.parse_args()
+    if not os.access(a.tessera, os.X_OK):
+        sys.exit(f"profile_accel.py: {a.tessera} is not an executable (build it, or pass --tessera PATH)")
+    result = {}
+    for mesh in a.meshes:
+        if not os.path.isfile(mesh):
+            sys.exit(f"profile_accel.py: {mesh}: no such file")
+        result[mesh] = profile(a.tessera, mesh, a.accel, a.resolution, a.ll_bytes)
+    if a.json:
+        print(json.dumps({m: {f"{s}/{k}": v for (s, k), v in rows.items()} for m, rows in result.items()}, indent=1))
+        return
+    fields = [("instructions", "instr"), ("l1Misses", "L1 miss"), ("llMisses", "LL miss"), ("mispredicts", "mispred")]
+    print(f"per ray; LL = {a.ll_bytes} bytes; (x) = ratio to embree")
+    for mesh, rows in result.items():
+        print(os.path.basename(mesh))
+        for (s, k) in sorted(rows, key=lambda sk: (sk[1], sk[0])):
+            r, e = rows[(s, k)], rows.get(("embree", k))
+            cells = []
+            for f, label in fields:
+                ratio = f" ({r[f] / e[f]:.2f}x)" if e and e[f] > 0 and s != "embree" else ""
+                cells.append(f"{label} {r[f]:8.1f}{ratio}")
+            print(f"  {k:8s} {s:7s} " + "  ".join(cells))
+
+
+if __name__ == "__main__":
+    main()
