@@ -103,8 +103,7 @@ struct WideRay {
             // side above. The far side bounds the entry, the near side the exit, each with the
             // origin moved by eps away from the side: t ∓ eps·|1/d| = (split − (o ∓ eps))/d.
             // Chosen by indexing with the direction's sign, not by branches: for incoherent rays
-            // the sign is a coin toss, and the branches the conditionals compiled to cost about one
-            // mispredict per ray (callgrind's branch simulator, Sponza's diffuse rays).
+            // the sign is a coin toss (as in watertightAxes).
             const int up = upward[a];
             const float below[2] = {ray.o[a] - eps, nan}, above[2] = {nan, ray.o[a] + eps};
             inv[a] = inv[a + 4] = invD[a];

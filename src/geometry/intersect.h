@@ -11,9 +11,8 @@ namespace tessera {
 /// Intersection", JCGT 2(1), Section 3.1): kz the direction's dominant axis (x if |dx| > |dy| and
 /// |dx| > |dz|, else y if |dy| > |dz|, else z), kx and ky the next two, swapped when d[kz] < 0 to
 /// keep the winding. By arithmetic, not branches: for incoherent rays the dominant axis and its sign
-/// are coin tosses, and the branches the conditionals compiled to cost one mispredict per ray
-/// (callgrind's branch simulator on Sponza's diffuse rays: 1.07 per ray in the BVH, most of which
-/// never reach a leaf).
+/// are coin tosses, and conditionals here compiled to branches that mispredicted about once per ray
+/// (docs/perf-log.md, "Mispredicted per-ray set-up branches").
 struct WatertightAxes {
     int kx, ky, kz;
 };

@@ -1,10 +1,8 @@
 #include "integrators/bdpt_connect.h"
 
 #include "integrators/bdpt.h"
-#include "integrators/sample_trace.h"
-
-
 #include "integrators/next_event.h"
+#include "integrators/sample_trace.h"
 
 namespace tessera {
 namespace {
