@@ -46,6 +46,9 @@ def main():
     a = ap.parse_args(argv)
     if a.seeds < 2:
         ap.error("--seeds must be at least 2 (a variance across seeds)")
+    for what, path in (("scene", a.scene), ("--ref", a.ref), ("--tessera", a.tessera)):
+        if not os.path.isfile(path):
+            ap.error("%s: %s is not a file" % (what, path))
 
     ref = read_exr(a.ref)[0]
     weight = 1.0 / (ref ** 2 + 0.01)
