@@ -4,8 +4,9 @@
     tools/bdpt_strategy_variance.py SCENE.gltf --ref REF.exr [--spp N] [--seeds K] [--tessera BIN]
                                     [--out DIR] [--top M] [-- RENDER_ARGS...]
 
-Renders SCENE K times with `tessera render --integrator bdpt --bdpt-strategies` (seeds 1..K, the
-RENDER_ARGS after `--` appended, e.g. `--max-depth 9 --resolution 256x256`), then for every
+Renders SCENE K times with `tessera render --integrator bdpt --bdpt-strategies` (seeds 1..K, at
+the reference's resolution unless RENDER_ARGS, appended after `--`, give one; e.g. `--max-depth 9`;
+the strategy images cover paths up to --max-depth + 2 vertices, 5 if unlimited), then for every
 strategy (s, t) takes the variance across the K seeds of its weighted image, per pixel and
 channel, divided by (r² + 0.01) with r the reference (the weights of `tessera compare`'s relMSE),
 averaged over the image: its share of the render's expected relMSE (the variance part). The
@@ -51,6 +52,8 @@ def main():
             ap.error("%s: %s is not a file" % (what, path))
 
     ref = read_exr(a.ref)[0]
+    if "--resolution" not in extra:  # render at the reference's size unless told otherwise
+        extra += ["--resolution", "%dx%d" % (ref.shape[1], ref.shape[0])]
     weight = 1.0 / (ref ** 2 + 0.01)
     totals, strategies = [], {}
     for seed in range(1, a.seeds + 1):
