@@ -55,10 +55,13 @@ def main():
     if "--resolution" not in extra:  # render at the reference's size unless told otherwise
         extra += ["--resolution", "%dx%d" % (ref.shape[1], ref.shape[0])]
     weight = 1.0 / (ref ** 2 + 0.01)
-    totals, strategies = [], {}
+    totals, folders = [], []
     for seed in range(1, a.seeds + 1):
         folder = os.path.join(a.out, "seed%d" % seed)
         os.makedirs(folder, exist_ok=True)
+        for old in os.listdir(folder):  # a previous run's strategies (another depth) must not count
+            if old.startswith("bdpt_") and old.endswith(".exr"):
+                os.remove(os.path.join(folder, old))
         image = os.path.join(a.out, "seed%d.exr" % seed)
         cmd = [a.tessera, "render", a.scene, "--integrator", "bdpt", "--spp", str(a.spp), "--seed", str(seed),
                "-o", image, "--no-png", "--quiet", "--bdpt-strategies", folder] + extra
@@ -69,15 +72,19 @@ def main():
             sys.exit("bdpt_strategy_variance.py: %s is %s, the reference %s: give the reference's resolution"
                      % (image, img.shape[:2], ref.shape[:2]))
         totals.append(img)
-        for name in sorted(os.listdir(folder)):
-            if name.endswith("_weighted.exr"):
-                strategies.setdefault(name[len("bdpt_"):-len("_weighted.exr")], []).append(read_exr(os.path.join(folder, name))[0])
+        folders.append(folder)
 
     def relvar(stack):
         return float(np.mean(np.var(np.stack(stack), axis=0, ddof=1) * weight))
 
     total = relvar(totals)
-    rows = sorted(((relvar(v), k, float(np.mean(v))) for k, v in strategies.items() if len(v) == a.seeds), reverse=True)
+    # One strategy at a time (K images in memory, not K times every strategy's).
+    names = sorted(set.intersection(*(set(n for n in os.listdir(f) if n.endswith("_weighted.exr")) for f in folders)))
+    rows = []
+    for name in names:
+        stack = [read_exr(os.path.join(f, name))[0] for f in folders]
+        rows.append((relvar(stack), name[len("bdpt_"):-len("_weighted.exr")], float(np.mean(stack))))
+    rows.sort(reverse=True)
     summed = sum(r[0] for r in rows)
     print("%s, %d spp, %d seeds: variance part of relMSE %.4g (the strategies' sum %.4g)" % (
         os.path.basename(a.scene), a.spp, a.seeds, total, summed))
