@@ -53,8 +53,15 @@ usPerSample() {  # binary integrator
 }
 
 instructions() {  # binary integrator spp: prints the instructions of the whole process
-    valgrind --tool=callgrind --callgrind-out-file="$TMP/cg" "$1" render "$SCENE" --integrator "$2" --threads 1 \
-        --resolution 64x64 --spp "$3" --no-png --quiet -o "$TMP/out.exr" > /dev/null 2>&1
+    # A run that fails (e.g. SIGILL in a library Valgrind cannot decode) must not be counted: its
+    # total would be the start-up's alone.
+    if ! LD_PRELOAD=$("$ROOT/tools/valgrind_preload.sh" "$1") valgrind --tool=callgrind --callgrind-out-file="$TMP/cg" \
+        "$1" render "$SCENE" --integrator "$2" --threads 1 --resolution 64x64 --spp "$3" --no-png --quiet \
+        -o "$TMP/out.exr" > "$TMP/valgrind.log" 2>&1; then
+        echo "bench_bdpt_speed.sh: $1 $2 failed under valgrind:" >&2
+        grep -v '^==[0-9]*== *$' "$TMP/valgrind.log" | tail -n 8 >&2
+        exit 1
+    fi
     awk '/^(summary|totals):/ { print $2; exit }' "$TMP/cg"
 }
 if [ "$MODE" = instructions ]; then

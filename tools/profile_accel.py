@@ -84,6 +84,13 @@ def parse_callgrind(path):
     return events, inclusive, calls
 
 
+def valgrind_env(tessera):
+    """The environment for running `tessera` under Valgrind (tools/valgrind_preload.sh)."""
+    preload = subprocess.run([os.path.join(os.path.dirname(os.path.abspath(__file__)), "valgrind_preload.sh"), tessera],
+                             stdout=subprocess.PIPE, text=True, check=True).stdout.strip()
+    return dict(os.environ, LD_PRELOAD=preload) if preload else None
+
+
 def profile(tessera, mesh, accels, resolution, ll_bytes):
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "callgrind.out")
@@ -92,7 +99,7 @@ def profile(tessera, mesh, accels, resolution, ll_bytes):
                "--collect-atstart=no", "--toggle-collect=*traceAllAtStackOffset*", f"--callgrind-out-file={out}",
                tessera, "bench-accel", mesh, "--accel", accels, "--threads", "1", "--repeat", "1",
                "--resolution", str(resolution), "--clock", "wall"]
-        run = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        run = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=valgrind_env(tessera))
         if run.returncode != 0:
             sys.exit(f"profile_accel.py: {' '.join(cmd)} failed:\n{run.stderr[-2000:]}")
         events, inclusive, calls = parse_callgrind(out)
