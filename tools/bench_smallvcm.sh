@@ -33,10 +33,11 @@
 # measure the load, not the renderer. Each renderer's CPU time is fitted over all its runs as
 # start-up + spp × time per pass (start-up: loading libraries and the scene, allocating, writing
 # the image: about 0.4 s each on 512²), and only the per-pass part counts, for both alike (with a
-# single --spp value no start-up can be fitted, and whole CPU times count). Both estimators are unbiased, so relMSE falls as 1/time and relMSE × CPU
-# seconds (inverse efficiency) compares them at equal time: the last column is SmallVCM's relMSE·s
-# over Tessera's, i.e. how many times lower Tessera's error is at equal time; the last line gives
-# the same from every run at once (relMSE × spp averaged over the budgets).
+# single --spp value no start-up can be fitted, and whole CPU times count). Both estimators are
+# unbiased, so relMSE falls as 1/time and relMSE × CPU seconds (inverse efficiency) compares them
+# at equal time: the last column is SmallVCM's relMSE·s over Tessera's, i.e. how many times lower
+# Tessera's error is at equal time; the last line gives the same from every run at once (relMSE ×
+# spp averaged over the budgets).
 set -euo pipefail
 
 SMALLVCM_URL=https://github.com/SmallVCM/SmallVCM
