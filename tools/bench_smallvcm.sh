@@ -130,9 +130,7 @@ for spp in $SPPS; do
         echo "$spp $t_sec $t_err $s_sec $s_err" >> "$OUT/runs.txt"
     done
 done
-# Each renderer's CPU time is fitted as start-up + spp × time per sample pass (least squares over
-# every run); the table's times are the fitted per-pass part, spp × slope, for both alike (start-up:
-# loading libraries and the scene, allocating, writing the image; SmallVCM's is not negligible).
+# The fit and the ratios of the header's "Time is CPU time" paragraph (least squares over every run).
 python3 - "$OUT/runs.txt" <<'EOF2'
 import sys
 rows = [[float(x) for x in line.split()] for line in open(sys.argv[1]) if line.strip()]
@@ -152,8 +150,7 @@ for spp in spps:
     ratios = [si * st / (ti * tt) for si, ti in zip(s, t)]
     print("| %g | %.2f | %.4f (%.4f–%.4f) | %.2f | %.4f (%.4f–%.4f) | %.2f× (%.2f–%.2f) |" % (
         spp, tt, mean(t), min(t), max(t), st, mean(s), min(s), max(s), mean(s) * st / (mean(t) * tt), min(ratios), max(ratios)))
-# Both estimators are unbiased: relMSE × spp is each one's error per sample, and the ratio of
-# (relMSE × spp) × (s per pass) is the equal-time ratio at any budget long enough for start-up not to count.
+# relMSE × spp is each estimator's error per sample pass.
 et = mean([r[2] * r[0] for r in rows])
 es = mean([r[4] * r[0] for r in rows])
 print()
