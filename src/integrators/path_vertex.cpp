@@ -198,6 +198,7 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
                 int maxVertices, std::vector<PathVertex>& out) {
     const Scene& scene = ctx.scene;
     float rrScale = 1.f;  // product of BSDF weights (and η² for radiance): what Russian roulette looks at
+    int scatteringVertices = 0;  // vertices so far that sampled a non-delta lobe (roulette's depth)
     int limit = maxVertices < 0 ? kMaxSubpathVertices : std::min(maxVertices, kMaxSubpathVertices);
     // The BSDF the last surface vertex sampled its direction with: the next vertex's two densities
     // at that vertex come from the same object (no second frame and copy per vertex).
@@ -276,8 +277,10 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         beta *= bs.weight;
         rrScale *= maxComponent(bs.weight) * (mode == TransportMode::Radiance ? bs.eta * bs.eta : 1.f);
         if (isBlack(beta)) break;
-        // Russian roulette from the third vertex on (integrators/russian_roulette.h).
-        if (out.size() >= 3 && !survivesRoulette(rrScale, beta, sampler, /* trace = */ nullptr)) break;
+        if (!bs.isDelta) ++scatteringVertices;
+        // Russian roulette from the second non-delta vertex on (integrators/russian_roulette.h);
+        // the throughput of the vertices before it is played there.
+        if (scatteringVertices >= 2 && !survivesRoulette(rrScale, beta, sampler, /* trace = */ nullptr)) break;
         ray = spawnRay(cur.p, cur.ng, bs.wiWorld);
     }
 }

@@ -9,7 +9,11 @@
 /// What q looks at: the throughput gained since the last roulette, with refractions' 1/η² radiance
 /// scaling undone (pbrt-v4 §14.1.5), so that paths inside glass are not killed for a scaling that
 /// reverses when they leave. Short paths carry most of the image and are never cut: pt and ptnee
-/// play from depth kRouletteMinDepth, sub-paths (lt, bdpt) from their third vertex on.
+/// play from depth kRouletteMinDepth, sub-paths (lt, bdpt, vcm) from their second vertex that
+/// scattered with a non-delta lobe on. Delta vertices do not count: a floor seen in a mirror is
+/// treated as a floor seen directly. Its SDS paths (camera → mirror → floor → mirror → light)
+/// are sampled only by s = 0 and dominate such images' error; a roulette at the floor multiplied
+/// their second moment by 1/q (measured in docs/perf-log.md, 2026-11-28).
 #include "core/math.h"
 #include "core/sampler.h"
 #include "integrators/sample_trace.h"
