@@ -1,5 +1,6 @@
 #include "accel/brute_force_accel.h"
 
+#include "accel/mixed_leaf.h"
 #include "geometry/alpha_mask.h"
 #include "geometry/intersect.h"
 
@@ -29,20 +30,17 @@ bool BruteForceAccel::intersect(const Ray& rayIn, Hit& hit) const {
             found = true;
         }
     }
+    uint32_t closestSphere = kInvalidId;
     for (uint32_t i = 0; i < geometry_.spheres.size(); ++i) {
         const Sphere& s = geometry_.spheres[i];
         double t = intersectSphere(s.center, s.radius, ray);
         // t < tMax in double may still round up to tMax: every backend then skips it.
         if (t < 0.0 || !(float(t) < ray.tMax)) continue;
         ray.tMax = float(t);
-        Vec3f n = sphereHitNormal(s.center, ray, float(t));
-        Vec2f uv = sphereUv(n);
-        hit.t = float(t);
-        hit.u = uv.x;
-        hit.v = uv.y;
-        hit.geomId = geometry_.sphereGeomId();
-        hit.primId = i;
-        hit.ng = n;
+        closestSphere = i;
+    }
+    if (closestSphere != kInvalidId) {
+        sphereHitRecord(geometry_, ray, closestSphere, ray.tMax, hit);
         found = true;
     }
     return found;

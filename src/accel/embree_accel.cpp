@@ -11,6 +11,7 @@
 
 #include "geometry/alpha_mask.h"
 #include "geometry/instances.h"
+#include "accel/mixed_leaf.h"
 #include "geometry/intersect.h"
 
 namespace tessera {
@@ -57,14 +58,8 @@ void sphereIntersectFn(const RTCIntersectFunctionNArguments* args) {
         double t = intersectSphere(s.center, s.radius, r);
         // t < tMax in double may still round up to tMax: every backend then skips it.
         if (t < 0.0 || !(float(t) < r.tMax)) continue;
-        Vec3f n = sphereHitNormal(s.center, r, float(t));
-        Vec2f uv = sphereUv(n);
+        // Only t and the ids: intersectWith builds the record of the closest hit (sphereHitRecord).
         RTCRayN_tfar(ray, args->N, i) = float(t);
-        RTCHitN_Ng_x(hit, args->N, i) = n.x;
-        RTCHitN_Ng_y(hit, args->N, i) = n.y;
-        RTCHitN_Ng_z(hit, args->N, i) = n.z;
-        RTCHitN_u(hit, args->N, i) = uv.x;
-        RTCHitN_v(hit, args->N, i) = uv.y;
         RTCHitN_primID(hit, args->N, i) = args->primID;
         RTCHitN_geomID(hit, args->N, i) = args->geomID;
         RTCHitN_instID(hit, args->N, i, 0) = args->context->instID[0];
@@ -260,7 +255,7 @@ bool EmbreeAccel::intersectWith(const Ray& ray, Hit& hit, bool coherent) const {
         hit.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
         if (hit.instId != kInvalidId) hit.ng = instanceNormalToWorld(geometry_.instances[hit.instId], hit.ng);
     } else {
-        hit.ng = Vec3f(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+        sphereHitRecord(geometry_, ray, hit.primId, hit.t, hit);  // the one user geometry: spheres
     }
     return true;
 }

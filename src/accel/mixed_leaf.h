@@ -52,19 +52,25 @@ inline bool intersectMixedLeaf(const SceneGeometry& g, const Ray& ray, const Pri
     return found;
 }
 
+/// The hit record of sphere `primId` hit at distance t (already rounded to float): normal and (u, v)
+/// computed once, for the closest hit only, by every backend alike (the search itself needs only t).
+inline void sphereHitRecord(const SceneGeometry& g, const Ray& ray, uint32_t primId, float t, Hit& hit) {
+    const Sphere& s = g.spheres[primId];
+    Vec3f n = sphereHitNormal(s.center, ray, t);
+    Vec2f uv = sphereUv(n);
+    hit.t = t;
+    hit.u = uv.x, hit.v = uv.y;
+    hit.geomId = g.sphereGeomId();
+    hit.primId = primId;
+    hit.ng = n;
+}
+
 /// The hit record of a mixed-leaf candidate hit at distance t.
 inline void mixedHitRecord(const SceneGeometry& g, const Ray& ray, const MixedCandidate& c, float t, Hit& hit) {
+    if (c.geomId == g.sphereGeomId()) return sphereHitRecord(g, ray, c.primId, t, hit);
     hit.t = t;
     hit.geomId = c.geomId;
     hit.primId = c.primId;
-    if (c.geomId == g.sphereGeomId()) {
-        const Sphere& s = g.spheres[c.primId];
-        Vec3f n = sphereHitNormal(s.center, ray, t);
-        Vec2f uv = sphereUv(n);
-        hit.u = uv.x, hit.v = uv.y;
-        hit.ng = n;
-        return;
-    }
     const TriangleMesh& mesh = g.meshes[c.geomId];
     const glm::uvec3& tri = mesh.triangles[c.primId];
     const Vec3f &p0 = mesh.positions[tri.x], &p1 = mesh.positions[tri.y], &p2 = mesh.positions[tri.z];
