@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "accel/mixed_leaf.h"
 #include "geometry/alpha_mask.h"
 #include "geometry/instances.h"
-#include "accel/mixed_leaf.h"
 #include "geometry/intersect.h"
 
 namespace tessera {
