@@ -145,7 +145,8 @@ SCENES = {
                     "BSDF sampling, bdpt also by light tracing", independent="ptnee is a different estimator"),
     "hdri-spheres": S("scenes/hdri-spheres/hdri-spheres.gltf", "256x192", [("bdpt", 128), ("ptnee", 256)],
                       "environment only (a small sun holds 2/3 of the light); the glass sphere's caustic comes from "
-                      "bdpt's light sub-paths (t=1)", independent="ptnee is a different estimator"),
+                      "bdpt's light sub-paths (t=1); seen through the glass it is SDS (direct-delta mask)",
+                      mask="direct-delta", independent="ptnee is a different estimator"),
     "hdri-sun": S("scenes/hdri-spheres/hdri-sun.gltf", "256x192", [("bdpt", 128), ("ptnee", 256)],
                   "environment only, no delta surfaces: every integrator samples every path",
                   independent="ptnee is a different estimator"),

@@ -66,8 +66,8 @@ NOTES = {
                     "reaches ptnee only by BSDF samples that hit the light, heavy-tailed pixels whose σ from 8 renders "
                     "is too small; around the dragon the image means agree to +0.03% (Z 0.4), the rest of the "
                     "-0.16% is what the glass shows (SDS paths, s = 0 only in either method)",
-    "hdri-spheres": "the glass sphere's caustic disagrees: the largest bin |z| (15.8, the floor left of the "
-                    "sphere's base) is 0.351 in bdpt and 0.214 in ptnee. The sun (4 texels of sky.exr, 51% of its "
+    "hdri-spheres": "the glass sphere's caustic disagrees: the largest bin |z| (15.6, the floor left of the "
+                    "sphere's base) is 0.356 in bdpt and 0.214 in ptnee. The sun (4 texels of sky.exr, 51% of its "
                     "power, radiance up to 8,750 at the scene's intensity) reaches the floor through or off the glass "
                     "only by ptnee's BSDF samples, so ptnee is heavy-tailed there and its typical render low (its 8 "
                     "image means fall in two groups, 0.2723–0.2725 and 0.2757–0.2768); where the camera sees the "
@@ -78,7 +78,9 @@ NOTES = {
                     "instead (`--env 0.5,0.5,0.5`, bdpt 512 and ptnee 1024 spp, seeds 5200–5203) bdpt and ptnee "
                     "agree to 0.01% (Z 0.4, 99.8% of 2x2 bins within 3σ). The combination follows bdpt in the "
                     "caustic (0.348) but leans to ptnee where its renders are low with a small spread (single bins "
-                    "on the floor beside the sphere up to 1% below bdpt)",
+                    "on the floor beside the sphere up to 1% below bdpt). The study judges the scene outside the "
+                    "direct-delta mask (8.7% of the pixels: the glass sphere seen directly), where the floor seen "
+                    "through the glass, lit through it by the sun, is SDS: s = 0 only in bdpt and in ptnee",
     "ring-caustic": "the largest bin |z| lies in the bottom rows (the floor nearest the camera), where lt's and "
                     "bdpt's t = 1 splats are largest and rare: single pixels there are heavy-tailed in both "
                     "(ptnee, which has no splats, is smooth there), so their σ from 8 renders is too small",
