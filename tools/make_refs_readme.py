@@ -66,7 +66,7 @@ NOTES = {
                     "reaches ptnee only by BSDF samples that hit the light, heavy-tailed pixels whose σ from 8 renders "
                     "is too small; around the dragon the image means agree to +0.03% (Z 0.4), the rest of the "
                     "-0.16% is what the glass shows (SDS paths, s = 0 only in either method)",
-    "hdri-spheres": "the glass sphere's caustic disagrees: the largest bin |z| (15.6, the floor left of the "
+    "hdri-spheres": "the glass sphere's caustic disagrees: the largest bin |z| (14.7, the floor left of the "
                     "sphere's base) is 0.356 in bdpt and 0.214 in ptnee. The sun (4 texels of sky.exr, 51% of its "
                     "power, radiance up to 8,750 at the scene's intensity) reaches the floor through or off the glass "
                     "only by ptnee's BSDF samples, so ptnee is heavy-tailed there and its typical render low (its 8 "
