@@ -78,9 +78,9 @@ NOTES = {
                     "instead (`--env 0.5,0.5,0.5`, bdpt 512 and ptnee 1024 spp, seeds 5200–5203) bdpt and ptnee "
                     "agree to 0.01% (Z 0.4, 99.8% of 2x2 bins within 3σ). The combination follows bdpt in the "
                     "caustic (0.348) but leans to ptnee where its renders are low with a small spread (single bins "
-                    "on the floor beside the sphere up to 1% below bdpt). The study judges the scene outside the "
-                    "direct-delta mask (8.7% of the pixels: the glass sphere seen directly), where the floor seen "
-                    "through the glass, lit through it by the sun, is SDS: s = 0 only in bdpt and in ptnee",
+                    "on the floor beside the sphere up to 1% below bdpt). The study judges the scene outside its "
+                    "direct-delta mask, which leaves out the 8.7% of the pixels that show the glass sphere: the floor "
+                    "seen there, lit through the glass by the sun, is SDS (s = 0 only, in bdpt as in ptnee)",
     "ring-caustic": "the largest bin |z| lies in the bottom rows (the floor nearest the camera), where lt's and "
                     "bdpt's t = 1 splats are largest and rare: single pixels there are heavy-tailed in both "
                     "(ptnee, which has no splats, is smooth there), so their σ from 8 renders is too small",
