@@ -95,7 +95,10 @@ SCENES = {
                       mask="direct-delta",
                       independent="lt is a different estimator (light paths splatted to the camera); bdpt's "
                                   "s=0 and s=1 strategies are absent from it"),
-    "sds-caustic": S("scenes/sds-caustic/sds-caustic.gltf", "256x192", [("bdpt", 48), ("ptnee", 96)],
+    # sds-caustic and hdri-spheres: the study gives these rare-event scenes 16x its budget
+    # (tools/study_run.py, RARE_EVENT_BUDGET_SCALE; its largest renders reach 256-512 spp), so their
+    # references hold 8 x 512 bdpt and 8 x 1024 ptnee samples per pixel, 16x and more of those renders.
+    "sds-caustic": S("scenes/sds-caustic/sds-caustic.gltf", "256x192", [("bdpt", 512), ("ptnee", 1024)],
                      "the caustic seen in the mirror is an SDS path: only s=0 (hitting the light by BSDF sampling "
                      "through the glass) samples it, in bdpt as in ptnee; lt cannot. The camera sees 93% of the "
                      "image in the mirror, so no part is left to judge on alone: no method samples it well",
@@ -143,7 +146,7 @@ SCENES = {
     "spot-light": S("scenes/spot-light/spot-light.gltf", "256x192", [("bdpt", 128), ("ptnee", 256)],
                     "spot and directional lights only (deltas): ptnee reaches every path through the glossy sphere by "
                     "BSDF sampling, bdpt also by light tracing", independent="ptnee is a different estimator"),
-    "hdri-spheres": S("scenes/hdri-spheres/hdri-spheres.gltf", "256x192", [("bdpt", 128), ("ptnee", 256)],
+    "hdri-spheres": S("scenes/hdri-spheres/hdri-spheres.gltf", "256x192", [("bdpt", 512), ("ptnee", 1024)],
                       "environment only (a small sun holds 2/3 of the light); the glass sphere's caustic comes from "
                       "bdpt's light sub-paths (t=1); seen through the glass it is SDS (direct-delta mask)",
                       mask="direct-delta", independent="ptnee is a different estimator"),
