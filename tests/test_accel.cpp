@@ -79,6 +79,28 @@ TEST(Accel, EmbreeMatchesBruteForceOnATriangleMesh) {
     EXPECT_EQ(m.normalDiff, 0);
 }
 
+// Embree's backend tests a scene's spheres itself after Embree's triangle query when there are
+// few of them, and hands them to Embree as user geometry when there are many
+// (EmbreeAccel::kDirectSphereCount): spheres among triangles, on both sides of that count, must give
+// brute force's records, closest hit and occlusion alike.
+TEST(Accel, EmbreeMatchesBruteForceOnSpheresAmongTrianglesFewOrMany) {
+    for (int nSpheres : {1, 3, 16, 17, 40}) {
+        SceneGeometry g;
+        g.meshes.push_back(test::makeUvSphereMesh(Vec3f(0), 1.f, 12, 24, 0));
+        Pcg32 rng(uint64_t(nSpheres), 0);
+        for (int i = 0; i < nSpheres; ++i) {
+            Vec3f c = Vec3f(rng.nextFloat(), rng.nextFloat(), rng.nextFloat()) * 4.f - 2.f;
+            g.spheres.push_back(Sphere{"s" + std::to_string(i), c, 0.1f + 0.5f * rng.nextFloat(), 0});
+        }
+        Mismatch m = compareBackends(g, 20000, 7, 1e-5f);
+        EXPECT_LE(m.hitMiss, 2) << nSpheres << " spheres";
+        EXPECT_EQ(m.idDiff, 0) << nSpheres << " spheres";
+        EXPECT_EQ(m.tDiff, 0) << nSpheres << " spheres";
+        EXPECT_EQ(m.uvDiff, 0) << nSpheres << " spheres";
+        EXPECT_EQ(m.normalDiff, 0) << nSpheres << " spheres";
+    }
+}
+
 TEST(Accel, EmbreeMatchesBruteForceOnSpheresIncludingRadius1e4) {
     std::vector<std::string> warnings;
     Scene scene = loadGltfScene(test::sourcePath("scenes/sphere-cornell/sphere-cornell.gltf"), warnings);

@@ -30,15 +30,7 @@ bool BruteForceAccel::intersect(const Ray& rayIn, Hit& hit) const {
             found = true;
         }
     }
-    uint32_t closestSphere = kInvalidId;
-    for (uint32_t i = 0; i < geometry_.spheres.size(); ++i) {
-        const Sphere& s = geometry_.spheres[i];
-        double t = intersectSphere(s.center, s.radius, ray);
-        // t < tMax in double may still round up to tMax: every backend then skips it.
-        if (t < 0.0 || !(float(t) < ray.tMax)) continue;
-        ray.tMax = float(t);
-        closestSphere = i;
-    }
+    uint32_t closestSphere = closestSphereInLoop(geometry_, ray);
     if (closestSphere != kInvalidId) {
         sphereHitRecord(geometry_, ray, closestSphere, ray.tMax, hit);
         found = true;
@@ -57,11 +49,7 @@ bool BruteForceAccel::occluded(const Ray& ray) const {
                 return true;
         }
     }
-    for (const Sphere& s : geometry_.spheres) {
-        double t = intersectSphere(s.center, s.radius, ray);
-        if (t >= 0.0 && float(t) < ray.tMax) return true;
-    }
-    return false;
+    return anySphereInLoopOccludes(geometry_, ray);
 }
 
 AccelStats BruteForceAccel::stats() const {

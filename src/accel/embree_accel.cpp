@@ -156,7 +156,8 @@ EmbreeAccel::EmbreeAccel(const SceneGeometry& geometry, const AccelOptions& opti
     rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
 
     attachMeshes(device, scene, geometry);
-    if (!geometry.spheres.empty()) {
+    directSpheres_ = geometry.spheres.size() <= kDirectSphereCount;
+    if (!geometry.spheres.empty() && !directSpheres_) {
         RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
         rtcSetGeometryUserPrimitiveCount(geom, unsigned(geometry.spheres.size()));
         rtcSetGeometryUserData(geom, const_cast<SceneGeometry*>(&geometry));
@@ -240,6 +241,20 @@ bool EmbreeAccel::intersectWith(const Ray& ray, Hit& hit, bool coherent) const {
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(static_cast<RTCScene>(scene_), &context, &rh);
+    if (directSpheres_) {
+        // The spheres against the closest triangle hit, as the user geometry's callback would test
+        // them (sphereIntersectFn).
+        Ray r = ray;
+        r.tMax = rh.ray.tfar;
+        uint32_t closest = closestSphereInLoop(geometry_, r);
+        if (closest != kInvalidId) {
+            hit.geomId = geometry_.sphereGeomId();
+            hit.primId = closest;
+            hit.instId = kInvalidId;
+            sphereHitRecord(geometry_, ray, closest, r.tMax, hit);
+            return true;
+        }
+    }
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     hit.t = rh.ray.tfar;
     hit.u = rh.hit.u;
@@ -262,6 +277,7 @@ bool EmbreeAccel::intersectWith(const Ray& ray, Hit& hit, bool coherent) const {
 
 bool EmbreeAccel::occluded(const Ray& ray) const {
     if (!isTraceableRay(ray)) return false;
+    if (directSpheres_ && anySphereInLoopOccludes(geometry_, ray)) return true;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRay r;

@@ -65,6 +65,29 @@ inline void sphereHitRecord(const SceneGeometry& g, const Ray& ray, uint32_t pri
     hit.ng = n;
 }
 
+/// The closest of all of `g`'s spheres along `ray`, tested one by one (brute force, and the Embree
+/// backend's few spheres): returns its index, kInvalidId if none, and lowers ray.tMax to its t. A t
+/// below tMax in double may still round up to tMax: every backend then skips it.
+inline uint32_t closestSphereInLoop(const SceneGeometry& g, Ray& ray) {
+    uint32_t closest = kInvalidId;
+    for (uint32_t i = 0; i < g.spheres.size(); ++i) {
+        double t = intersectSphere(g.spheres[i].center, g.spheres[i].radius, ray);
+        if (t < 0.0 || !(float(t) < ray.tMax)) continue;
+        ray.tMax = float(t);
+        closest = i;
+    }
+    return closest;
+}
+
+/// Whether any of `g`'s spheres blocks `ray`, tested one by one.
+inline bool anySphereInLoopOccludes(const SceneGeometry& g, const Ray& ray) {
+    for (const Sphere& s : g.spheres) {
+        double t = intersectSphere(s.center, s.radius, ray);
+        if (t >= 0.0 && float(t) < ray.tMax) return true;
+    }
+    return false;
+}
+
 /// The hit record of a mixed-leaf candidate hit at distance t.
 inline void mixedHitRecord(const SceneGeometry& g, const Ray& ray, const MixedCandidate& c, float t, Hit& hit) {
     if (c.geomId == g.sphereGeomId()) return sphereHitRecord(g, ray, c.primId, t, hit);
