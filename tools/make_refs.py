@@ -96,8 +96,9 @@ SCENES = {
                       independent="lt is a different estimator (light paths splatted to the camera); bdpt's "
                                   "s=0 and s=1 strategies are absent from it"),
     # sds-caustic and hdri-spheres: the study gives these rare-event scenes 16x its budget
-    # (tools/study_run.py, RARE_EVENT_BUDGET_SCALE; its largest renders reach 256-512 spp), so their
-    # references hold 8 x 512 bdpt and 8 x 1024 ptnee samples per pixel, 16x and more of those renders.
+    # (tools/study_run.py, RARE_EVENT_BUDGET_SCALE; its largest renders reach 128-1024 spp), so their
+    # references hold 8 x 512 bdpt and 8 x 1024 ptnee samples per pixel: the unbiased methods' largest
+    # study renders have >= 47x the references' noise (refs/study/summary.csv, ref_floor).
     "sds-caustic": S("scenes/sds-caustic/sds-caustic.gltf", "256x192", [("bdpt", 512), ("ptnee", 1024)],
                      "the caustic seen in the mirror is an SDS path: only s=0 (hitting the light by BSDF sampling "
                      "through the glass) samples it, in bdpt as in ptnee; lt cannot. The camera sees 93% of the "
