@@ -41,7 +41,7 @@ RARE_EVENT_BUDGET_SCALE = {
 
 
 def budget_scale(args, name):
-    return 1 if getattr(args, "uniform_budgets", False) else RARE_EVENT_BUDGET_SCALE.get(name, 1)
+    return 1 if args.uniform_budgets else RARE_EVENT_BUDGET_SCALE.get(name, 1)
 
 
 def log(msg):
