@@ -322,6 +322,44 @@ TEST(GltfBsdf, TypeMappingAndDeltaFlags) {
     }
 }
 
+// SurfaceBsdf::sample(wo, sampler, ...) skips the numbers sampleBsdfReadsLobeChoice and
+// sampleBsdfReadsDirection say a material does not read: for every material type, changing such a
+// number changes nothing sampleBsdf returns (were one read after all, it would be a constant 0.5).
+TEST(GltfBsdf, NumbersSaidUnreadChangeNoSample) {
+    const BsdfParams materials[] = {
+        makeParams({"", Rgb(0.7f, 0.5f, 0.3f), 0.f, 0.8f, 0.f, 0.f}),             // Lambertian
+        makeParams({"", Rgb(0.9f, 0.6f, 0.3f), 1.f, 0.f}),                        // smooth mirror
+        makeParams({"", Rgb(0.9f, 1.f, 0.8f), 0.f, 0.f, 1.f, 1.f, false}),        // smooth glass
+        makeParams({"", Rgb(0.8f), 1.f, 0.5f}),                                   // rough metal
+        makeParams({"", Rgb(0.8f, 0.3f, 0.2f), 0.f, 0.5f}),                       // the glTF model
+        makeParams({"", Rgb(1.f), 0.f, 0.3f, 1.f, 1.f, false}),                   // rough glass (model)
+    };
+    bool seen[5] = {};
+    Pcg32 rng(7, 3);
+    for (const BsdfParams& m : materials) {
+        seen[int(m.type)] = true;
+        for (float theta : {20.f, 70.f, 150.f}) {
+            Vec3f wo = direction(theta, 30.f);
+            for (int k = 0; k < 200; ++k) {
+                float uLobe = rng.nextFloat(), uLobe2 = rng.nextFloat();
+                Vec2f u = rng.next2D(), u2 = rng.next2D();
+                BsdfSample a, b;
+                bool okA = sampleBsdf(m, wo, uLobe, u, TransportMode::Radiance, a);
+                bool okB = sampleBsdf(m, wo, sampleBsdfReadsLobeChoice(m) ? uLobe : uLobe2, sampleBsdfReadsDirection(m) ? u : u2,
+                                      TransportMode::Radiance, b);
+                ASSERT_EQ(okA, okB) << "type " << int(m.type);
+                if (!okA) continue;
+                EXPECT_EQ(a.wiLocal, b.wiLocal) << "type " << int(m.type);
+                EXPECT_EQ(a.pdfW, b.pdfW);
+                EXPECT_EQ(a.weight, b.weight);
+                EXPECT_EQ(a.isDelta, b.isDelta);
+                EXPECT_EQ(a.eta, b.eta);
+            }
+        }
+    }
+    for (bool s : seen) EXPECT_TRUE(s) << "a material type is not covered";
+}
+
 // No NaN or Inf anywhere on a sweep of degenerate inputs: roughness 0 and 1 and the threshold,
 // black and saturated base colours, ior 1 and 10, grazing and exactly tangent directions.
 TEST(GltfBsdf, FiniteOnDegenerateInputs) {

@@ -212,6 +212,30 @@ TEST(Merge, FilmSumsDoNotDependOnGrouping) {
     EXPECT_NEAR(tessera::filmAccumValue(one.sumData()[1]), expect, 1e-12 * expect);
 }
 
+/// toFilmAccum's three-part truncation equals the compiler's double -> __int128 conversion (libgcc's
+/// __fixdfti) on every magnitude the film holds: doubles with random 53-bit significands at
+/// exponents from 2^-90 to just below the saturation at 2^62, both signs, and the edges.
+TEST(Merge, FilmAccumConversionIsExactTruncation) {
+    std::mt19937_64 rng(29);
+    std::vector<double> values = {0.0, -0.0, 0x1p-64, 0x1p-65, 0x1p-1, 1.0, 0x1p62 - 0x1p9, std::nextafter(0x1p62, 0.0), 0x1p31,
+                                  0x1p32, 0x1p63 * 0x1p-64, 1.0 - 0x1p-53, 0x1.fffffffffffffp-1, 3.0 * 0x1p-33};
+    for (int k = 0; k < 200000; ++k) {
+        double significand = 1.0 + double(rng() >> 11) * 0x1p-53;  // [1, 2), all 53 bits random
+        int exponent = int(rng() % 152) - 90;                        // 2^-90 .. 2^61
+        values.push_back(std::ldexp(significand, exponent));
+    }
+    for (double v : values)
+        for (double x : {v, -v}) {
+            __extension__ typedef __int128 I;
+            I expect = I(x * 0x1p64);
+            ASSERT_TRUE(tessera::toFilmAccum(x) == expect) << std::hexfloat << x;
+        }
+    // Beyond 2^62 the accumulator saturates; NaN goes to the negative end (as before the fast path).
+    EXPECT_TRUE(tessera::toFilmAccum(0x1p62) == tessera::FilmAccum(1) << 126);
+    EXPECT_TRUE(tessera::toFilmAccum(-1e30) == -(tessera::FilmAccum(1) << 126));
+    EXPECT_TRUE(tessera::toFilmAccum(std::nan("")) == -(tessera::FilmAccum(1) << 126));
+}
+
 TEST(Merge, SampleRangeOptionIsChecked) {
     fs::path dir = tessera::test::tempDir("merge-options");
     for (const char* bad : {"8:4", "3:3", "-1:4", "a:b", "4", "0:17"}) {

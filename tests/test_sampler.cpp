@@ -79,7 +79,7 @@ TEST(Sampler, ReversedTablesMatchTheMatrices) {
     Pcg32 rng(4, 2);
     for (int i = 0; i < 20000; ++i) {
         uint32_t index = i < 4096 ? uint32_t(i) : rng.nextU32();
-        for (int d = 0; d < kSobolDimensions; ++d) ASSERT_EQ(sobolReversedBits(index, d), reverseBits32(sobolBits(index, d))) << index << " " << d;
+        for (int d = 0; d < kSobolDimensions; ++d) ASSERT_EQ(sobolReversedBitsOfReversed(reverseBits32(index), d), reverseBits32(sobolBits(index, d))) << index << " " << d;
     }
     EXPECT_EQ(reverseBits32(1u), 0x80000000u);
     EXPECT_EQ(reverseBits32(0x12345678u), 0x1e6a2c48u);

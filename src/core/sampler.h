@@ -62,9 +62,11 @@ inline uint32_t sobolBits(uint32_t index, int dim) {
     return v;
 }
 
-/// The Sobol' matrices with bit-reversed columns, as 4 byte-indexed tables per dimension:
-/// sobolReversedBits(i, d) = reverseBits32(sobolBits(i, d)) in 4 look-ups instead of a loop over the
-/// index's bits (a shuffled index has all 32 bits set at random).
+/// The Sobol' matrices with bit-reversed columns, as 4 byte-indexed tables per dimension, indexed
+/// by the bit-reversed sample index: sobolReversedBitsOfReversed(reverseBits32(i), d) =
+/// reverseBits32(sobolBits(i, d)) in 4 look-ups instead of a loop over the index's bits (a shuffled
+/// index has all 32 bits set at random). The shuffle (owenScramble) ends in a bit reversal, so a
+/// draw takes its reversed index straight from the permutation and spares that reversal.
 struct SobolReversedTables {
     uint32_t byteTable[kSobolDimensions][4][256];
 };
@@ -76,8 +78,9 @@ constexpr SobolReversedTables makeSobolReversedTables() {
                 uint32_t x = 0;
                 for (int j = 0; j < 8; ++j)
                     if (v & (1u << j)) {
-                        // Reversed column of index bit 8b + j.
-                        uint32_t c = kSobolMatrices[d][8 * b + j], r = 0;
+                        // Bit 8b + j of the reversed index is bit 31 − 8b − j of the index: the
+                        // reversed column of that bit.
+                        uint32_t c = kSobolMatrices[d][31 - (8 * b + j)], r = 0;
                         for (int k = 0; k < 32; ++k) r |= ((c >> k) & 1u) << (31 - k);
                         x ^= r;
                     }
@@ -87,9 +90,10 @@ constexpr SobolReversedTables makeSobolReversedTables() {
 }
 inline constexpr SobolReversedTables kSobolReversedTables = makeSobolReversedTables();
 
-inline uint32_t sobolReversedBits(uint32_t index, int dim) {
+inline uint32_t sobolReversedBitsOfReversed(uint32_t reversedIndex, int dim) {
     const auto& t = kSobolReversedTables.byteTable[dim];
-    return t[0][index & 0xffu] ^ t[1][(index >> 8) & 0xffu] ^ t[2][(index >> 16) & 0xffu] ^ t[3][index >> 24];
+    uint32_t r = reversedIndex;
+    return t[0][r & 0xffu] ^ t[1][(r >> 8) & 0xffu] ^ t[2][(r >> 16) & 0xffu] ^ t[3][r >> 24];
 }
 
 /// [0, 1) float from the top 24 bits of a 32-bit fraction (never rounds up to 1).
@@ -133,8 +137,8 @@ public:
     void startConnection(int s, int t) { open(kConnectBlock | (clampId(s, 4095) << 12) | clampId(t, 4095), s + t < kSobolDepth); }
 
     // Both draws compute owenScramble(sobolBits(idx, d), seed) as
-    // reverseBits32(laineKarrasPermutation(sobolReversedBits(idx, d), seed)), with the shuffled index
-    // idx = owenScramble(index, seed') = reverseBits32(laineKarrasPermutation(reversed index, seed')).
+    // reverseBits32(laineKarrasPermutation(reverseBits32(sobolBits(idx, d)), seed)), with the shuffled
+    // index idx = owenScramble(index, seed') = reverseBits32(laineKarrasPermutation(reversed index, seed')).
     float get1D() {
         if (kind_ == SamplerKind::Independent) return rng_.nextFloat();
         uint32_t slot = slot_++;
@@ -150,6 +154,11 @@ public:
         if (kind_ == SamplerKind::Independent) rng_.next2D();
         else ++slot_;
     }
+    /// The same for a 1D draw.
+    void skip1D() {
+        if (kind_ == SamplerKind::Independent) rng_.nextFloat();
+        else ++slot_;
+    }
 
     Vec2f get2D() {
         if (kind_ == SamplerKind::Independent) return rng_.next2D();
@@ -159,13 +168,13 @@ public:
         // one 4D point. Elsewhere each draw is padded: dimensions (0,1) with its own shuffle.
         bool camera = block_ == kCameraBlock;
         uint64_t h = dimensionHash(camera ? 0 : slot);
-        uint32_t idx = reverseBits32(laineKarrasPermutation(reversedIndex_, uint32_t(h)));
+        uint32_t idxReversed = laineKarrasPermutation(reversedIndex_, uint32_t(h));
         int d0 = camera ? int(2 * slot) : 0;
         // Per-coordinate scramble seeds: the hash's high half and a multiplicative remix of it.
         uint64_t hs = (h >> 32) * 0x9e3779b97f4a7c15ULL + (camera ? slot : 0u) * 0xd1b54a32d192ed03ULL;
         uint32_t sx = uint32_t(hs >> 32), sy = uint32_t(mixBits(hs));
-        return {bitsToUnitFloat(reverseBits32(laineKarrasPermutation(sobolReversedBits(idx, d0), sx))),
-                bitsToUnitFloat(reverseBits32(laineKarrasPermutation(sobolReversedBits(idx, d0 + 1), sy)))};
+        return {bitsToUnitFloat(reverseBits32(laineKarrasPermutation(sobolReversedBitsOfReversed(idxReversed, d0), sx))),
+                bitsToUnitFloat(reverseBits32(laineKarrasPermutation(sobolReversedBitsOfReversed(idxReversed, d0 + 1), sy)))};
     }
 
 private:

@@ -270,9 +270,7 @@ void randomWalk(const RenderContext& ctx, Ray ray, Rgb beta, Sampler& sampler, T
         SurfaceBsdfSample bs;
         if (mode == TransportMode::Radiance) sampler.startBounce(int(out.size()) - 2);
         else sampler.startLightBounce(int(out.size()) - 2);
-        float uLobe = sampler.get1D();
-        Vec2f uDir = sampler.get2D();
-        if (!bsdf.sample(cur.woWorld, uLobe, uDir, mode, bs)) break;
+        if (!bsdf.sample(cur.woWorld, sampler, mode, bs)) break;
         cur.delta = bs.isDelta;
         beta *= bs.weight;
         rrScale *= maxComponent(bs.weight) * (mode == TransportMode::Radiance ? bs.eta * bs.eta : 1.f);

@@ -48,9 +48,7 @@ Rgb PtIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampler&
         sampler.startBounce(depth);
         SurfaceBsdf bsdf(params, si.ns, si.ng);
         SurfaceBsdfSample bs;
-        float uLobe = sampler.get1D();
-        Vec2f uDir = sampler.get2D();
-        if (!bsdf.sample(wo, uLobe, uDir, TransportMode::Radiance, bs)) break;
+        if (!bsdf.sample(wo, sampler, TransportMode::Radiance, bs)) break;
         if (trace) [[unlikely]] {
             trace->bsdfSample(bs.wiWorld, bs.pdfFwdW, bs.isDelta, bs.weight);
         }

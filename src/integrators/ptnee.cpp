@@ -145,9 +145,7 @@ Rgb PtNeeIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sampl
 
         // Continue the path by BSDF sampling.
         SurfaceBsdfSample bs;
-        float uLobe = sampler.get1D();
-        Vec2f uDir = sampler.get2D();
-        if (!bsdf.sample(wo, uLobe, uDir, TransportMode::Radiance, bs)) {
+        if (!bsdf.sample(wo, sampler, TransportMode::Radiance, bs)) {
             if (trace) [[unlikely]] trace->add("L", L);
             break;
         }

@@ -89,9 +89,7 @@ Rgb SppmIntegrator::sample(const RenderContext& ctx, Vec2i, Vec2f raster, Sample
         // estimated (its sampled direction would count the same light again).
         sampler.startBounce(depth);
         SurfaceBsdfSample bs;
-        float uLobe = sampler.get1D();
-        Vec2f uDir = sampler.get2D();
-        if (!bsdf.sample(wo, uLobe, uDir, TransportMode::Radiance, bs) || !bs.isDelta) break;
+        if (!bsdf.sample(wo, sampler, TransportMode::Radiance, bs) || !bs.isDelta) break;
         beta *= bs.weight;
         rrScale *= maxComponent(bs.weight) * bs.eta * bs.eta;
         if (isBlack(beta)) break;

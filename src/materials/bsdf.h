@@ -61,6 +61,12 @@ Rgb evalBsdfWithPdf(const BsdfParams& m, const Vec3f& woLocal, const Vec3f& wiLo
 /// Samples wi given wo; `uLobe` picks reflection/refraction, `u` the direction. False when no
 /// direction is produced (e.g. wo grazing).
 bool sampleBsdf(const BsdfParams& m, const Vec3f& woLocal, float uLobe, Vec2f u, TransportMode mode, BsdfSample& out);
+/// Whether sampleBsdf reads `uLobe` (a choice between lobes: dielectric reflection or refraction,
+/// the glTF model's lobes) and `u` (a direction within a non-delta lobe) for this material: a
+/// smooth mirror reads neither, a Lambertian surface only `u`. Kept next to sampleBsdf: a material
+/// type that starts reading a number must say so here (test_gltf_bsdf checks each type).
+inline bool sampleBsdfReadsLobeChoice(const BsdfParams& m) { return m.type == MaterialType::Dielectric || m.type == MaterialType::Pbr; }
+inline bool sampleBsdfReadsDirection(const BsdfParams& m) { return m.type != MaterialType::Mirror && m.type != MaterialType::Dielectric; }
 
 /// Unpolarised Fresnel reflectance of a dielectric interface; eta = η_inside / η_outside, cosThetaI
 /// signed (negative: arriving from inside). Exact formula (Born & Wolf; pbrt-v4 eq. 9.5 form).

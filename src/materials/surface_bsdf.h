@@ -13,6 +13,7 @@
 /// Directions are world space and point away from the surface (`woWorld` towards the previous path
 /// vertex, `wiWorld` towards the next one).
 #include "core/frame.h"
+#include "core/sampler.h"
 #include "materials/bsdf.h"
 
 namespace tessera {
@@ -98,6 +99,19 @@ public:
     /// Samples wi given wo. False when no direction is produced or it violates the side rule. Not
     /// on a BSDF built with Use::EvalOnly.
     bool sample(const Vec3f& woWorld, float uLobe, Vec2f u, TransportMode mode, SurfaceBsdfSample& out) const;
+    /// sample() with its numbers drawn from `sampler` in a fixed order, the lobe choice (1D) then
+    /// the direction (2D). A number this material does not read is skipped, its slot consumed but
+    /// not computed (a Sobol' draw is ~60 instructions): every later draw, and so the image, is
+    /// what drawing it would give.
+    bool sample(const Vec3f& woWorld, Sampler& sampler, TransportMode mode, SurfaceBsdfSample& out) const {
+        float uLobe = 0.5f;
+        Vec2f u(0.5f);
+        if (sampleBsdfReadsLobeChoice(mat_)) uLobe = sampler.get1D();
+        else sampler.skip1D();
+        if (sampleBsdfReadsDirection(mat_)) u = sampler.get2D();
+        else sampler.skip2D();
+        return sample(woWorld, uLobe, u, mode, out);
+    }
 
     /// The importance-transport shading-normal factor |wo·ns| |wi·ng| / (|wo·ng| |wi·ns|)
     /// (Veach 1997, eq. 5.19 with wo on the light side); 1 for radiance.
