@@ -152,6 +152,40 @@ TEST(Accel, DegenerateRaysNeverHit) {
     }
 }
 
+// isTraceableRay against its definition, one coordinate at a time: every component of o and d
+// (each vector lane) set to ±inf, NaN, ±0, a denormal or the largest float, tMin/tMax in every order
+// with infinities and NaN, and seeded random rays.
+TEST(Accel, TraceableRayPredicateMatchesItsDefinition) {
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = kInfinity, big = std::numeric_limits<float>::max();
+    auto definition = [](const Ray& r) {
+        bool finite = true, nonZero = false;
+        for (int i = 0; i < 3; ++i) {
+            finite = finite && std::isfinite(r.o[i]) && std::isfinite(r.d[i]);
+            nonZero = nonZero || r.d[i] != 0.f;
+        }
+        return finite && nonZero && r.tMin <= r.tMax;
+    };
+    const float values[] = {0.f, -0.f, 1.f, -2.5f, 1e-40f, big, -big, inf, -inf, nan};
+    int checked = 0;
+    for (int component = 0; component < 6; ++component)
+        for (float v : values)
+            for (float tMin : {0.f, 1.f, -inf, nan})
+                for (float tMax : {0.5f, 1.f, inf, nan}) {
+                    Ray r{Vec3f(0.3f, -0.2f, 5.f), Vec3f(0.f, 1.f, 0.f), tMin, tMax};
+                    (component < 3 ? r.o : r.d)[component % 3] = v;
+                    ASSERT_EQ(isTraceableRay(r), definition(r)) << "component " << component << " value " << v << " t " << tMin << " " << tMax;
+                    ++checked;
+                }
+    Pcg32 rng(11, 5);
+    for (int k = 0; k < 10000; ++k) {
+        auto coordinate = [&] { return rng.nextFloat() < 0.05f ? values[rng.nextU32() % 10] : (rng.nextFloat() - 0.5f) * 100.f; };
+        Ray r{Vec3f(coordinate(), coordinate(), coordinate()), Vec3f(coordinate(), coordinate(), coordinate()), coordinate(), coordinate()};
+        ASSERT_EQ(isTraceableRay(r), definition(r)) << k;
+        ++checked;
+    }
+    EXPECT_EQ(checked, 6 * 10 * 16 + 10000);
+}
+
 TEST(Accel, EmptySceneAndUnknownName) {
     SceneGeometry g;
     auto accel = createAccel("embree", g);
