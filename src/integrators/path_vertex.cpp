@@ -151,9 +151,8 @@ Rgb endSigma(const RenderContext& ctx, const PathVertex& v, const PathVertex& ot
 
 }  // namespace
 
-Rgb segmentTransmittance(const RenderContext& ctx, const PathVertex& a, const PathVertex& b, bool& attenuates) {
+Rgb segmentTransmittanceInVolumes(const RenderContext& ctx, const PathVertex& a, const PathVertex& b, bool& attenuates) {
     attenuates = false;
-    if (!ctx.scene.hasVolumes()) return Rgb(1.f);
     Rgb sigmaA = endSigma(ctx, a, b), sigmaB = endSigma(ctx, b, a);
     attenuates = segmentAttenuates(sigmaA, sigmaB);
     if (!attenuates) return Rgb(1.f);
@@ -295,9 +294,7 @@ void traceCameraSubpath(const RenderContext& ctx, Vec2f raster, Sampler& sampler
     z0.ng = z0.ns = ctx.camera.forward();
     // Box-filtered pixel: We cos / (pdfPosA pdfDirW) = 1 for the pixel the ray was generated in.
     z0.beta = Rgb(1.f);
-    float pdfPosA, pdfDirW;
-    ctx.camera.pdfEmission(ray.d, pdfPosA, pdfDirW);
-    z0.pdfFwdA = pdfPosA;  // never used by the weights (no strategy hits the lens)
+    z0.pdfFwdA = 1.f / ctx.camera.lensArea();  // generateRay's pdfPosA; never used by the weights (no strategy hits the lens)
     randomWalk(ctx, ray, Rgb(1.f), sampler, TransportMode::Radiance, maxVertices, out);
 }
 

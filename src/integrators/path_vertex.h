@@ -116,7 +116,13 @@ void pdfLightBothA(const RenderContext& ctx, const PathVertex& v, const PathVert
 /// connections), symmetric in `a` and `b`. Only surface vertices and points on area emitters can be
 /// ends inside a volume; a vertex at infinity makes the segment infinitely long. `attenuates` is false (and the result 1)
 /// when neither end lies on an attenuating volume's inside: callers then multiply nothing.
-Rgb segmentTransmittance(const RenderContext& ctx, const PathVertex& a, const PathVertex& b, bool& attenuates);
+/// Inline for its first test: most scenes have no volume, and the walks and every connection ask.
+Rgb segmentTransmittanceInVolumes(const RenderContext& ctx, const PathVertex& a, const PathVertex& b, bool& attenuates);
+inline Rgb segmentTransmittance(const RenderContext& ctx, const PathVertex& a, const PathVertex& b, bool& attenuates) {
+    attenuates = false;
+    if (!ctx.scene.hasVolumes()) return Rgb(1.f);
+    return segmentTransmittanceInVolumes(ctx, a, b, attenuates);
+}
 
 /// The "f" of a vertex towards `next` in a connection: BSDF (adjoint for importance, with the
 /// shading correction), emitted radiance / intensity for light vertices, importance We for the camera.

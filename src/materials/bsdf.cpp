@@ -68,17 +68,6 @@ void finalizeBsdfParams(BsdfParams& p) {
     p.coatFresnelAvg = p.type == MaterialType::Pbr ? pbrCoatFresnelAverage(p) : 0.f;
 }
 
-bool isDeltaMaterial(const BsdfParams& m) {
-    switch (m.type) {
-    case MaterialType::Mirror:
-    case MaterialType::Dielectric: return true;
-    case MaterialType::Pbr: return !pbrHasNonDeltaLobe(m);
-    case MaterialType::Diffuse:
-    case MaterialType::RoughConductor: return false;
-    }
-    return false;
-}
-
 Rgb evalBsdf(const BsdfParams& m, const Vec3f& woIn, const Vec3f& wiIn, TransportMode mode) {
     if (m.type == MaterialType::Pbr) return evalPbr(m, woIn, wiIn, mode);
     if (m.type == MaterialType::Diffuse) return lambertEval(m.baseColor, woIn.z, wiIn.z);

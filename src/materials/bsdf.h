@@ -32,11 +32,23 @@ inline constexpr float kMinAlpha = 1e-3f;
 ///  * Pbr: everything else (materials/gltf_pbr.h).
 void finalizeBsdfParams(BsdfParams& p);
 
+bool pbrHasNonDeltaLobe(const BsdfParams& m);  // materials/gltf_pbr.h
+
 /// True when every lobe of the material is a delta lobe (eval and pdf are zero everywhere): light
 /// sampling is pointless there. A material that mixes a delta lobe with a non-delta one (smooth
 /// plastic: delta coat over a diffuse base) is not delta; its samples say which lobe they took
-/// (BsdfSample::isDelta), and eval/pdf cover the non-delta lobes only.
-bool isDeltaMaterial(const BsdfParams& m);
+/// (BsdfSample::isDelta), and eval/pdf cover the non-delta lobes only. Inline: every SurfaceBsdf
+/// asks once (several per bidirectional connection).
+inline bool isDeltaMaterial(const BsdfParams& m) {
+    switch (m.type) {
+    case MaterialType::Mirror:
+    case MaterialType::Dielectric: return true;
+    case MaterialType::Pbr: return !pbrHasNonDeltaLobe(m);
+    case MaterialType::Diffuse:
+    case MaterialType::RoughConductor: return false;
+    }
+    return false;
+}
 
 /// The Lambertian lobe (MaterialType::Diffuse) from the cosines of wo and wi with the shading
 /// normal, all it depends on: callers that have them skip the change of frame. Two-sided like
