@@ -90,9 +90,8 @@ constexpr SobolReversedTables makeSobolReversedTables() {
 }
 inline constexpr SobolReversedTables kSobolReversedTables = makeSobolReversedTables();
 
-inline uint32_t sobolReversedBitsOfReversed(uint32_t reversedIndex, int dim) {
+inline uint32_t sobolReversedBitsOfReversed(uint32_t r, int dim) {
     const auto& t = kSobolReversedTables.byteTable[dim];
-    uint32_t r = reversedIndex;
     return t[0][r & 0xffu] ^ t[1][(r >> 8) & 0xffu] ^ t[2][(r >> 16) & 0xffu] ^ t[3][r >> 24];
 }
 
